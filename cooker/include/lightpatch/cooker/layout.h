@@ -1,0 +1,61 @@
+// The light-map layout: where every baked triangle lands in the one light-map page.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lightpatch/cooker/scene.h"
+
+namespace lightpatch::cooker {
+
+struct Rect {
+  int x = 0, y = 0, w = 0, h = 0;  // texels; origin top-left (image row 0 = glTF v 0)
+  bool contains(int px, int py) const { return px >= x && py >= y && px < x + w && py < y + h; }
+};
+
+// Light-map UVs of one MeshInstance. Vertices are split where charts are cut, so each layout
+// vertex refers back to a source vertex of the MeshInstance.
+struct MeshLayout {
+  std::vector<uint32_t> source_vertex;  // layout vertex -> MeshInstance vertex
+  std::vector<glm::vec2> uv;            // light-map UV in [0,1], glTF convention
+  std::vector<uint32_t> indices;        // one triangle per source triangle, same order
+};
+
+// A baked object: one glTF node's meshes, owning one rectangle of the light map that no other
+// baked object overlaps. Patches are cut per region.
+struct Region {
+  std::string name;          // node name
+  int object = -1;           // semi-dynamic object index or -1
+  std::vector<int> meshes;   // MeshInstance indices
+  Rect rect;
+};
+
+// An edge of a smooth surface (its two triangles share both source vertices, so both normals)
+// that the unwrap cut: it appears in two charts, and finalize_map() makes the light map agree on
+// both sides. Light-map UVs in [0,1].
+struct SeamEdge {
+  glm::vec2 a0, a1;  // the edge in the first chart
+  glm::vec2 b0, b1;  // the same edge in the second chart (b0 is the same point as a0)
+};
+
+struct LayoutOptions {
+  int lightmap_size = 0;         // > 0: fixed page size (texels, square); 0 = derive from density
+  float texels_per_unit = 0.0f;  // > 0: texels per metre; 0 = default for a room-sized scene
+  int border_texels = 2;         // empty texels around each chart
+  int max_lightmap_size = 4096;
+};
+
+struct Layout {
+  int width = 0, height = 0;   // texels
+  float texels_per_unit = 0;   // the density actually used (may be lowered to fit)
+  bool verbatim_uv1 = false;   // every mesh had a valid TEXCOORD_1
+  std::vector<MeshLayout> meshes;  // parallel to Scene::meshes
+  std::vector<Region> regions;
+  std::vector<SeamEdge> seams;
+  std::vector<std::string> notes;  // decisions worth telling the user (density lowered, ...)
+};
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,58 @@
+// Float light maps (linear irradiance, the lights' units) and the set the cooker bakes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lightpatch::cooker {
+
+// Row-major float image, row 0 = top (glTF v = 0). channels is 1 or 3.
+struct FloatImage {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> data;
+  FloatImage() = default;
+  FloatImage(int w, int h, int c) : width(w), height(h), channels(c), data(size_t(w) * h * c, 0.0f) {}
+  float& at(int x, int y, int c) { return data[(size_t(y) * width + x) * channels + c]; }
+  float at(int x, int y, int c) const { return data[(size_t(y) * width + x) * channels + c]; }
+};
+
+// DESIGN.md, "The method in one screen". Contribution and shadow maps are for colour (1,1,1)
+// and intensity 1; one channel where the light's transport is grey, three where bounce tints it.
+struct ShadowMap {
+  int light = 0;   // index into BakedMaps::lights (semi-dynamic lights)
+  int object = 0;  // Scene::objects index
+  FloatImage map;  // S_ol = C_l - T_ol (may be negative)
+};
+
+// What object o changes in the static lights' light: B − B_o, B_o being the static lights with o
+// present (its shadow, positive; bounce it adds, negative). 3 channels, absolute irradiance.
+struct StaticShadowMap {
+  int object = 0;  // Scene::objects index
+  FloatImage map;
+};
+
+// Light that both objects block from light l, which S_al + S_bl removes twice: added back with
+// the light's factor while both are visible (inclusion-exclusion for pairs).
+struct PairCorrectionMap {
+  int light = 0;     // index into BakedMaps::lights
+  int object_a = 0;  // Scene::objects, object_a < object_b
+  int object_b = 0;
+  FloatImage map;
+};
+
+struct BakedMaps {
+  // Irradiance of one 8-bit step of the final light map at the authored exposure (the
+  // significance threshold for early outs, pair culling and patch extraction). For a light's
+  // C_l/S_ol (baked at intensity 1) the threshold is output_step / (authored max(colour) *
+  // intensity), floored so that a light authored off or at 0 still keeps its patches.
+  float output_step = 0.0f;
+  FloatImage base;                        // B, 3 channels
+  std::vector<int> lights;                // Scene::lights index of each semi-dynamic light
+  std::vector<FloatImage> contribution;   // C_l, parallel to lights
+  std::vector<ShadowMap> shadows;         // kept pairs only
+  std::vector<PairCorrectionMap> pair_corrections;  // overlapping shadows that matter
+  std::vector<StaticShadowMap> static_shadows;  // what objects change in the static light
+};
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,31 @@
+// From float maps to a pack: patches per map and region (paper Alg. 4), 8-bit quantization with
+// a per-patch scale and encoding, RGBA channel atlases (thesis §4.1.5), and the pack bytes in the
+// format of lightpatch/pack_format.h.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lightpatch/cooker/layout.h"
+#include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/report.h"
+#include "lightpatch/cooker/scene.h"
+
+namespace lightpatch::cooker {
+
+enum class EncodingPolicy { kAuto, kLinear, kSquare };
+
+struct PackOptions {
+  int max_atlas_size = 2048;  // power of two
+  // Largest patch side (texels). Smaller tiles skip more empty light map but add gutters and
+  // records; 32 gave the fewest atlas bytes per scene in our measurements (README, Numbers).
+  int tile_size = 32;
+  EncodingPolicy encoding = EncodingPolicy::kAuto;
+};
+
+// Builds the pack bytes. Statistics and the encoding decision go into `report`.
+std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const BakedMaps& maps,
+                                const PackOptions& options, Report& report);
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,28 @@
+// Scene state files (DESIGN.md, Scene state): overrides by glTF node name. Parsed by the tool for
+// bake-state and recompose; names the scene or pack lacks are an error naming them.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace lightpatch::cooker {
+
+// A scene state as DESIGN.md's state JSON gives it: overrides by glTF node name.
+struct LightOverride {
+  bool has_on = false, on = true;
+  bool has_color = false;
+  float color[3] = {1, 1, 1};
+  bool has_intensity = false;
+  float intensity = 1;
+};
+struct StateSpec {
+  std::map<std::string, LightOverride> lights;
+  std::map<std::string, bool> objects;  // name -> visible
+};
+StateSpec parse_state_json(const std::string& text, const std::string& what);  // throws CookError
+StateSpec load_state_file(const std::string& path);                           // throws CookError
+// --states: one JSON state per non-empty line.
+std::vector<StateSpec> load_states_jsonl(const std::string& path);            // throws CookError
+
+}  // namespace lightpatch::cooker

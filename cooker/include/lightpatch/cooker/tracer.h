@@ -1,0 +1,53 @@
+// Ray casting against the whole scene, built once (Embree 3). Semi-dynamic objects are included
+// or excluded per query by mask, never by rebuilding. Occluders are double-sided.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <memory>
+
+#include "lightpatch/cooker/scene.h"
+
+namespace lightpatch::cooker {
+
+struct Hit {
+  bool hit = false;
+  float t = 0.0f;
+  int mesh = -1;       // MeshInstance index
+  int triangle = -1;   // triangle within the mesh
+  float u = 0, v = 0;  // barycentrics of vertices 1 and 2
+  glm::vec3 geometric_normal{0.0f};  // unit, world space, facing per winding
+};
+
+class Tracer {
+ public:
+  virtual ~Tracer() = default;
+  // Scene-scaled self-intersection offset (metres).
+  virtual float epsilon() const = 0;
+  // Closest hit along origin + t*dir, t in (tmin, tmax). `with_objects`: semi-dynamic objects
+  // take part; static geometry always does.
+  virtual Hit intersect(const glm::vec3& origin, const glm::vec3& dir, float tmin, float tmax,
+                        bool with_objects) const = 0;
+  // True if anything static blocks the segment.
+  virtual bool occluded_static(const glm::vec3& origin, const glm::vec3& dir, float tmin,
+                               float tmax) const = 0;
+  // Writes the indices of the semi-dynamic objects (Scene::objects) that the segment crosses,
+  // ignoring static geometry, each once, at most `max_out`; returns how many were written. Used to
+  // find, in one pass over a light's rays, which objects block them.
+  virtual int blocking_objects(const glm::vec3& origin, const glm::vec3& dir, float tmin,
+                               float tmax, int* out, int max_out) const = 0;
+  // A semi-dynamic light's shadow ray in one traversal: -1 if static geometry blocks the segment,
+  // otherwise what blocking_objects() would return. The default makes two queries; tracers
+  // override it with one.
+  virtual int shadow_query(const glm::vec3& origin, const glm::vec3& dir, float tmin, float tmax,
+                           int* out, int max_out) const {
+    if (occluded_static(origin, dir, tmin, tmax)) return -1;
+    return blocking_objects(origin, dir, tmin, tmax, out, max_out);
+  }
+  virtual uint64_t rays_traced() const = 0;
+};
+
+std::unique_ptr<Tracer> make_embree_tracer(const Scene& scene);
+
+}  // namespace lightpatch::cooker

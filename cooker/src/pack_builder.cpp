@@ -1,0 +1,426 @@
+#include "lightpatch/cooker/pack_builder.h"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "atlas_packer.h"
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/pack_format.h"
+#include "lightpatch/pack_view.h"
+#include "pack_writer.h"
+#include "patch_extract.h"
+#include "quantize.h"
+#include "worker_pool.h"
+
+namespace lightpatch::cooker {
+
+using namespace pack;
+static_assert(std::endian::native == std::endian::little, "the pack writer assumes a little-endian host");
+
+namespace {
+
+struct MapJob {
+  const FloatImage* map = nullptr;
+  SourcePatch prototype;
+  float threshold = 0.0f;
+  std::string what;
+};
+
+float max3(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
+
+nlohmann::json error_json(const EncodingError& e) {
+  nlohmann::json j;
+  j["relative_rmse"] = e.sum_sq_value > 0.0 ? std::sqrt(e.sum_sq_error / e.sum_sq_value) : 0.0;
+  j["max_error"] = e.max_error;
+  j["samples"] = e.samples;
+  return j;
+}
+
+void check_map(const FloatImage& m, const Layout& layout, int channels_a, int channels_b,
+               const std::string& what) {
+  if (m.width != layout.width || m.height != layout.height ||
+      (m.channels != channels_a && m.channels != channels_b) ||
+      m.data.size() != size_t(m.width) * m.height * m.channels) {
+    throw CookError(what + ": " + std::to_string(m.width) + "x" + std::to_string(m.height) + "x" +
+                    std::to_string(m.channels) + " does not match the " + std::to_string(layout.width) +
+                    "x" + std::to_string(layout.height) + " light map");
+  }
+}
+
+}  // namespace
+
+std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const BakedMaps& maps,
+                                const PackOptions& options, Report& report) {
+  if (layout.width <= 0 || layout.height <= 0 || layout.width > int(kMaxLightmapSize) ||
+      layout.height > int(kMaxLightmapSize)) {
+    throw CookError("light-map size " + std::to_string(layout.width) + "x" + std::to_string(layout.height) +
+                    " out of range");
+  }
+  if (options.max_atlas_size < kMinAtlasSize || options.max_atlas_size > int(kMaxAtlasSize) ||
+      (options.max_atlas_size & (options.max_atlas_size - 1)) != 0) {
+    throw CookError("maximum atlas size " + std::to_string(options.max_atlas_size) +
+                    " must be a power of two in " + std::to_string(kMinAtlasSize) + ".." +
+                    std::to_string(kMaxAtlasSize));
+  }
+  if (!std::isfinite(maps.output_step) || maps.output_step < 0.0f) {
+    throw CookError("output step must be finite and >= 0");
+  }
+  if (maps.lights.size() != maps.contribution.size()) {
+    throw CookError("baked maps: " + std::to_string(maps.lights.size()) + " lights but " +
+                    std::to_string(maps.contribution.size()) + " contribution maps");
+  }
+  if (maps.lights.size() >= kNone16 || scene.objects.size() >= kNone16) {
+    throw CookError("too many semi-dynamic lights or objects for the pack format (max 65534)");
+  }
+  check_map(maps.base, layout, 3, 3, "base map");
+
+  // Authored factor of each light, as the baker's significance rule has it (maps.h).
+  float s_max = 0.0f;
+  for (const Light& l : scene.lights) s_max = std::max(s_max, max3(l.color) * l.intensity);
+  std::vector<float> authored(maps.lights.size());
+  for (size_t i = 0; i < maps.lights.size(); ++i) {
+    const int li = maps.lights[i];
+    if (li < 0 || size_t(li) >= scene.lights.size()) {
+      throw CookError("baked maps: light " + std::to_string(i) + " refers to scene light " +
+                      std::to_string(li) + " which does not exist");
+    }
+    const Light& l = scene.lights[size_t(li)];
+    float a = std::max(max3(l.color) * l.intensity, 1e-2f * s_max);
+    if (!(a > 0.0f) || !std::isfinite(a)) a = 1.0f;
+    authored[i] = a;
+    check_map(maps.contribution[i], layout, 1, 3, "contribution map of light '" + l.name + "'");
+  }
+
+  const float half_step = 0.5f * maps.output_step;
+  // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
+  // those corners only; a tile also never exceeds an atlas (less its gutters).
+  const int max_dim = std::min(options.max_atlas_size - 2, std::max(options.tile_size, 4));
+  std::vector<MapJob> jobs;
+  {
+    MapJob j;
+    j.map = &maps.base;
+    j.prototype.kind = kGroupBase;
+    j.threshold = half_step;
+    j.what = "base map";
+    jobs.push_back(j);
+  }
+  for (size_t i = 0; i < maps.lights.size(); ++i) {
+    MapJob j;
+    j.map = &maps.contribution[i];
+    j.prototype.kind = kGroupContribution;
+    j.prototype.light = int(i);
+    j.prototype.weight = authored[i];
+    j.threshold = half_step / authored[i];
+    j.what = "contribution map of light '" + scene.lights[size_t(maps.lights[i])].name + "'";
+    jobs.push_back(j);
+  }
+  std::vector<const ShadowMap*> shadows;
+  for (const ShadowMap& s : maps.shadows) shadows.push_back(&s);
+  std::sort(shadows.begin(), shadows.end(), [](const ShadowMap* a, const ShadowMap* b) {
+    return std::tie(a->light, a->object) < std::tie(b->light, b->object);
+  });
+  for (size_t k = 0; k < shadows.size(); ++k) {
+    const ShadowMap& s = *shadows[k];
+    if (s.light < 0 || size_t(s.light) >= maps.lights.size() || s.object < 0 ||
+        size_t(s.object) >= scene.objects.size()) {
+      throw CookError("shadow map (light " + std::to_string(s.light) + ", object " +
+                      std::to_string(s.object) + ") refers to a light or object that does not exist");
+    }
+    if (k > 0 && shadows[k - 1]->light == s.light && shadows[k - 1]->object == s.object) {
+      throw CookError("two shadow maps for light " + std::to_string(s.light) + ", object " +
+                      std::to_string(s.object));
+    }
+    MapJob j;
+    j.map = &s.map;
+    j.prototype.kind = kGroupShadow;
+    j.prototype.light = s.light;
+    j.prototype.object = s.object;
+    j.prototype.weight = authored[size_t(s.light)];
+    j.threshold = half_step / authored[size_t(s.light)];
+    j.what = "shadow map of object '" + scene.objects[size_t(s.object)].name + "' for light '" +
+             scene.lights[size_t(maps.lights[size_t(s.light)])].name + "'";
+    check_map(s.map, layout, 1, 3, j.what);
+    jobs.push_back(j);
+  }
+
+  std::vector<const PairCorrectionMap*> corrections;
+  for (const PairCorrectionMap& p : maps.pair_corrections) corrections.push_back(&p);
+  std::sort(corrections.begin(), corrections.end(),
+            [](const PairCorrectionMap* a, const PairCorrectionMap* b) {
+              return std::tie(a->light, a->object_a, a->object_b) <
+                     std::tie(b->light, b->object_a, b->object_b);
+            });
+  for (size_t k = 0; k < corrections.size(); ++k) {
+    const PairCorrectionMap& p = *corrections[k];
+    if (p.light < 0 || size_t(p.light) >= maps.lights.size() || p.object_a < 0 ||
+        p.object_b <= p.object_a || size_t(p.object_b) >= scene.objects.size()) {
+      throw CookError("pair correction (light " + std::to_string(p.light) + ", objects " +
+                      std::to_string(p.object_a) + ", " + std::to_string(p.object_b) +
+                      ") refers to a light or objects that do not exist, or not in order");
+    }
+    if (k > 0 && corrections[k - 1]->light == p.light && corrections[k - 1]->object_a == p.object_a &&
+        corrections[k - 1]->object_b == p.object_b) {
+      throw CookError("two pair corrections for one light and pair");
+    }
+    MapJob j;
+    j.map = &p.map;
+    j.prototype.kind = kGroupPairCorrection;
+    j.prototype.light = p.light;
+    j.prototype.object = p.object_a;
+    j.prototype.object_b = p.object_b;
+    j.prototype.weight = authored[size_t(p.light)];
+    j.threshold = half_step / authored[size_t(p.light)];
+    j.what = "overlap correction of objects '" + scene.objects[size_t(p.object_a)].name + "' and '" +
+             scene.objects[size_t(p.object_b)].name + "' for light '" +
+             scene.lights[size_t(maps.lights[size_t(p.light)])].name + "'";
+    check_map(p.map, layout, 1, 3, j.what);
+    jobs.push_back(j);
+  }
+  std::vector<const StaticShadowMap*> statics;
+  for (const StaticShadowMap& s : maps.static_shadows) statics.push_back(&s);
+  std::sort(statics.begin(), statics.end(),
+            [](const StaticShadowMap* a, const StaticShadowMap* b) { return a->object < b->object; });
+  for (size_t k = 0; k < statics.size(); ++k) {
+    const StaticShadowMap& s = *statics[k];
+    if (s.object < 0 || size_t(s.object) >= scene.objects.size())
+      throw CookError("static shadow map of object " + std::to_string(s.object) +
+                      ", which does not exist");
+    if (k > 0 && statics[k - 1]->object == s.object)
+      throw CookError("two static shadow maps for object " + std::to_string(s.object));
+    MapJob j;
+    j.map = &s.map;
+    j.prototype.kind = kGroupStaticShadow;
+    j.prototype.object = s.object;
+    j.threshold = half_step;  // absolute irradiance, like the base map
+    j.what = "static-light shadow map of object '" + scene.objects[size_t(s.object)].name + "'";
+    check_map(s.map, layout, 3, 3, j.what);
+    jobs.push_back(j);
+  }
+
+  // Patches (paper Alg. 4) and their quantization, one map per work item.
+  const int threads = worker_count(0);
+  std::vector<std::vector<SourcePatch>> per_job(jobs.size());
+  struct ColourDecision {
+    int three = 0, one = 0;  // 3-channel patches kept, collapsed to 1
+    float max_spread = 0.0f;
+  };
+  std::vector<ColourDecision> colour(jobs.size());
+  parallel_for(int(jobs.size()), threads, [&](int i) {
+    const MapJob& j = jobs[size_t(i)];
+    extract_patches(*j.map, layout.regions, j.threshold, max_dim, j.prototype, j.what, per_job[size_t(i)]);
+    // Bounce tints C_l and S_ol; a light's colour is a run-time factor, so a patch keeps three
+    // channels only where the tint shows above the 8-bit step (B is always 3: authored colours).
+    if (j.prototype.kind == kGroupBase) return;
+    for (SourcePatch& p : per_job[size_t(i)]) {
+      if (p.channels != 3) continue;
+      float spread = 0.0f;
+      const bool collapsed = collapse_untinted(p, &spread);
+      ColourDecision& d = colour[size_t(i)];
+      (collapsed ? d.one : d.three)++;
+      d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);
+    }
+  });
+  std::vector<SourcePatch> patches;
+  for (auto& v : per_job) {
+    for (auto& p : v) patches.push_back(std::move(p));
+  }
+  per_job.clear();
+  std::vector<QuantizedPatch> quantized(patches.size());
+  parallel_for(int(patches.size()), threads, [&](int i) {
+    quantized[size_t(i)] = quantize_patch(patches[size_t(i)], options.encoding);
+  });
+
+  PackContents c;
+  c.lightmap_width = uint32_t(layout.width);
+  c.lightmap_height = uint32_t(layout.height);
+  for (size_t i = 0; i < maps.lights.size(); ++i) {
+    const Light& l = scene.lights[size_t(maps.lights[i])];
+    LightRecord r{};
+    const std::string name = l.name.empty() ? "light_" + std::to_string(maps.lights[i]) : l.name;
+    c.add_name(name, &r.name_offset, &r.name_length);
+    for (int k = 0; k < 3; ++k) r.color[k] = l.color[k];
+    r.intensity = l.intensity;
+    if (!std::isfinite(r.intensity) || r.intensity < 0.0f || !std::isfinite(max3(l.color)) ||
+        std::min({l.color.x, l.color.y, l.color.z}) < 0.0f) {
+      throw CookError("light '" + name + "': colour and intensity must be finite and >= 0");
+    }
+    r.type = l.type == LightType::kPoint ? kLightPoint : l.type == LightType::kSpot ? kLightSpot : kLightDirectional;
+    c.lights.push_back(r);
+  }
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    ObjectRecord r{};
+    const std::string& n = scene.objects[i].name;
+    c.add_name(n.empty() ? "object_" + std::to_string(i) : n, &r.name_offset, &r.name_length);
+    c.objects.push_back(r);
+  }
+
+  // Groups: consecutive patches with one owner (jobs are already in group order).
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const SourcePatch& p = patches[i];
+    const uint16_t light = p.light < 0 ? kNone16 : uint16_t(p.light);
+    const uint16_t object = p.object < 0 ? kNone16 : uint16_t(p.object);
+    const uint16_t object_b = p.object_b < 0 ? kNone16 : uint16_t(p.object_b);
+    if (c.groups.empty() || c.groups.back().kind != p.kind || c.groups.back().light != light ||
+        c.groups.back().object_a != object || c.groups.back().object_b != object_b) {
+      c.groups.push_back(GroupRecord{p.kind, light, object, object_b, uint32_t(i), 0});
+    }
+    c.groups.back().patch_count++;
+  }
+  if (c.groups.size() > 0x10000u) throw CookError("more than 65536 patch groups");
+
+  // Atlases.
+  std::vector<PackItem> items(patches.size());
+  for (size_t i = 0; i < patches.size(); ++i) {
+    items[i] = PackItem{patches[i].dest.w, patches[i].dest.h, patches[i].channels};
+  }
+  const AtlasLayout atlas_layout = pack_atlases(items, options.max_atlas_size);
+  for (const AtlasSize& a : atlas_layout.atlases) {
+    PackContents::Atlas atlas;
+    atlas.width = uint32_t(a.width);
+    atlas.height = uint32_t(a.height);
+    atlas.rgba.assign(size_t(a.width) * a.height * 4, 0);
+    c.atlases.push_back(std::move(atlas));
+  }
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const SourcePatch& p = patches[i];
+    const QuantizedPatch& q = quantized[i];
+    const Placement& pl = atlas_layout.placements[i];
+    PackContents::Atlas& atlas = c.atlases[size_t(pl.atlas)];
+    // Patch texels and a one-texel gutter replicating the edge texels.
+    for (int y = -1; y <= p.dest.h; ++y) {
+      const int sy = std::clamp(y, 0, p.dest.h - 1);
+      for (int x = -1; x <= p.dest.w; ++x) {
+        const int sx = std::clamp(x, 0, p.dest.w - 1);
+        uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 + size_t(pl.channel)];
+        for (int ch = 0; ch < p.channels; ++ch) {
+          dst[ch] = q.codes[(size_t(sy) * p.dest.w + size_t(sx)) * size_t(p.channels) + size_t(ch)];
+        }
+      }
+    }
+    PatchRecord r{};
+    r.atlas_x = uint16_t(pl.x);
+    r.atlas_y = uint16_t(pl.y);
+    r.width = uint16_t(p.dest.w);
+    r.height = uint16_t(p.dest.h);
+    r.dest_x = uint16_t(p.dest.x);
+    r.dest_y = uint16_t(p.dest.y);
+    r.atlas = uint8_t(pl.atlas);
+    r.channel = uint8_t(pl.channel);
+    r.channel_count = uint8_t(p.channels);
+    r.encoding = q.encoding;
+    r.scale = q.scale;
+    r.flags = p.negative ? kFlagNegative : 0;
+    c.patches.push_back(r);
+  }
+  for (size_t g = 0; g < c.groups.size(); ++g) {
+    for (uint32_t k = 0; k < c.groups[g].patch_count; ++k) c.patches[c.groups[g].first_patch + k].group = uint16_t(g);
+  }
+
+  // Light-map UVs of the baked meshes.
+  if (!layout.meshes.empty()) {
+    if (layout.meshes.size() != scene.meshes.size()) {
+      throw CookError("layout has " + std::to_string(layout.meshes.size()) + " meshes, scene " +
+                      std::to_string(scene.meshes.size()));
+    }
+    for (size_t i = 0; i < scene.meshes.size(); ++i) {
+      const MeshInstance& mi = scene.meshes[i];
+      const MeshLayout& ml = layout.meshes[i];
+      if (ml.source_vertex.size() != ml.uv.size()) throw CookError("mesh layout " + std::to_string(i) + ": UV count");
+      PackContents::Mesh m;
+      c.add_name(mi.name, &m.record.name_offset, &m.record.name_length);
+      m.record.node_index = mi.node_index < 0 ? 0xFFFFFFFFu : uint32_t(mi.node_index);
+      m.record.primitive = uint32_t(mi.primitive_index);
+      m.record.object = mi.object < 0 ? kNone16 : uint16_t(mi.object);
+      for (size_t v = 0; v < ml.uv.size(); ++v) {
+        m.vertices.push_back(MeshVertex{ml.source_vertex[v], ml.uv[v].x, ml.uv[v].y});
+      }
+      m.indices = ml.indices;
+      for (uint32_t idx : m.indices) {
+        if (idx >= m.vertices.size()) throw CookError("mesh layout " + std::to_string(i) + ": index out of range");
+      }
+      if (m.indices.size() % 3 != 0) throw CookError("mesh layout " + std::to_string(i) + ": index count");
+      c.meshes.push_back(std::move(m));
+    }
+  }
+
+  std::vector<uint8_t> bytes = write_pack(c);
+  {
+    // The writer's output must pass the loader's validation.
+    PackView view;
+    Error error;
+    if (PackView::open(bytes.data(), bytes.size(), &view, &error) != Status::kOk) {
+      throw CookError(std::string("internal: the written pack does not validate: ") + error.message);
+    }
+  }
+
+  // Report: patches, the encoding decision with measured errors, atlas bytes vs a light map.
+  EncodingError total[2], chosen;
+  int chose[2] = {0, 0};
+  std::map<std::string, int> by_kind;
+  uint64_t negative = 0;
+  const char* kind_names[kGroupKindMax + 1] = {"base", "contribution", "shadow", "pair_correction",
+                                               "static_shadow"};
+  for (size_t i = 0; i < patches.size(); ++i) {
+    total[0].add(quantized[i].error[0]);
+    total[1].add(quantized[i].error[1]);
+    chosen.add(quantized[i].error[quantized[i].encoding]);
+    chose[quantized[i].encoding]++;
+    by_kind[kind_names[patches[i].kind]]++;
+    negative += patches[i].negative ? 1 : 0;
+  }
+  uint64_t atlas_bytes = 0;
+  nlohmann::json atlases = nlohmann::json::array();
+  for (const auto& a : c.atlases) {
+    atlas_bytes += a.rgba.size();
+    atlases.push_back({{"width", a.width}, {"height", a.height}});
+  }
+  const uint64_t lightmap_bytes = uint64_t(layout.width) * layout.height * 3;
+  std::lock_guard<std::mutex> lock(report.mutex());
+  nlohmann::json& j = report.root()["pack"];
+  j["patches"] = patches.size();
+  j["patches_by_kind"] = by_kind;
+  j["negative_patches"] = negative;
+  j["groups"] = c.groups.size();
+  j["significance_rule"] =
+      "a texel is significant when some channel exceeds half an 8-bit output step at the authored "
+      "exposure: 0.5 * output_step for the base map, 0.5 * output_step / a_l for C_l and S_ol "
+      "(a_l = authored max(colour) * intensity, floored at 1/100 of the brightest light)";
+  j["encoding"]["policy"] = options.encoding == EncodingPolicy::kAuto     ? "auto"
+                            : options.encoding == EncodingPolicy::kLinear ? "linear"
+                                                                          : "square";
+  j["encoding"]["error_units"] = "final-map irradiance at the authored state, significant texels";
+  j["encoding"]["linear"] = error_json(total[0]);
+  j["encoding"]["square"] = error_json(total[1]);
+  j["encoding"]["chosen"] = error_json(chosen);
+  j["encoding"]["patches_linear"] = chose[0];
+  j["encoding"]["patches_square"] = chose[1];
+  j["encoding"]["output_step"] = maps.output_step;
+  j["atlases"] = atlases;
+  j["atlas_bytes"] = atlas_bytes;
+  j["conventional_lightmap_bytes"] = lightmap_bytes;
+  j["atlas_to_lightmap_ratio"] = lightmap_bytes > 0 ? double(atlas_bytes) / double(lightmap_bytes) : 0.0;
+  j["pack_bytes"] = bytes.size();
+  nlohmann::json maps_colour = nlohmann::json::array();
+  int three = 0, one = 0;
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const ColourDecision& d = colour[i];
+    if (d.three + d.one == 0) continue;
+    three += d.three;
+    one += d.one;
+    maps_colour.push_back({{"map", jobs[i].what}, {"patches_3_channel", d.three},
+                           {"patches_1_channel", d.one}, {"max_tint", d.max_spread}});
+  }
+  j["colour"]["rule"] =
+      "a 3-channel (bounce-tinted) patch of C_l or S_ol keeps 3 channels where some texel's "
+      "max - min over channels exceeds half an output step (final-map units at the authored "
+      "state); otherwise it is stored as 1 channel holding (max + min) / 2";
+  j["colour"]["patches_3_channel"] = three;
+  j["colour"]["patches_1_channel_from_3"] = one;
+  j["colour"]["maps"] = maps_colour;
+  return bytes;
+}
+
+}  // namespace lightpatch::cooker

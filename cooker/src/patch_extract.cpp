@@ -1,0 +1,109 @@
+#include "patch_extract.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lightpatch/cooker/error.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+bool significant_at(const FloatImage& map, int x, int y, float sign, float threshold) {
+  for (int c = 0; c < map.channels; ++c) {
+    if (sign * map.at(x, y, c) > threshold) return true;
+  }
+  return false;
+}
+
+// Bounding box of significant texels inside r; false if none.
+bool significant_box(const FloatImage& map, const Rect& r, float sign, float threshold, Rect* box) {
+  int x0 = r.x + r.w, y0 = r.y + r.h, x1 = r.x - 1, y1 = r.y - 1;
+  for (int y = r.y; y < r.y + r.h; ++y) {
+    for (int x = r.x; x < r.x + r.w; ++x) {
+      if (!significant_at(map, x, y, sign, threshold)) continue;
+      x0 = std::min(x0, x);
+      y0 = std::min(y0, y);
+      x1 = std::max(x1, x);
+      y1 = std::max(y1, y);
+    }
+  }
+  if (x1 < x0) return false;
+  *box = Rect{x0, y0, x1 - x0 + 1, y1 - y0 + 1};
+  return true;
+}
+
+}  // namespace
+
+void extract_patches(const FloatImage& map, const std::vector<Region>& regions, float threshold,
+                     int max_dim, const SourcePatch& prototype, const std::string& what,
+                     std::vector<SourcePatch>& out) {
+  if (map.channels != 1 && map.channels != 3) {
+    throw CookError(what + ": a map must have 1 or 3 channels, has " + std::to_string(map.channels));
+  }
+  for (size_t i = 0; i < map.data.size(); ++i) {
+    if (!std::isfinite(map.data[i])) {
+      const size_t t = i / size_t(map.channels);
+      throw CookError(what + ": non-finite value at texel (" + std::to_string(t % size_t(map.width)) +
+                      ", " + std::to_string(t / size_t(map.width)) + ")");
+    }
+  }
+  for (const Region& region : regions) {
+    // Clip the region to the map.
+    const int rx0 = std::max(region.rect.x, 0), ry0 = std::max(region.rect.y, 0);
+    const int rx1 = std::min(region.rect.x + region.rect.w, map.width);
+    const int ry1 = std::min(region.rect.y + region.rect.h, map.height);
+    if (rx1 <= rx0 || ry1 <= ry0) continue;
+    const Rect clipped{rx0, ry0, rx1 - rx0, ry1 - ry0};
+    for (const float sign : {1.0f, -1.0f}) {
+      Rect box;
+      if (!significant_box(map, clipped, sign, threshold, &box)) continue;
+      for (int ty = box.y; ty < box.y + box.h; ty += max_dim) {
+        for (int tx = box.x; tx < box.x + box.w; tx += max_dim) {
+          const Rect tile{tx, ty, std::min(max_dim, box.x + box.w - tx), std::min(max_dim, box.y + box.h - ty)};
+          Rect r;
+          if (!significant_box(map, tile, sign, threshold, &r)) continue;
+          SourcePatch p = prototype;
+          p.negative = sign < 0.0f;
+          p.channels = map.channels;
+          p.dest = r;
+          p.threshold = threshold;
+          p.values.assign(size_t(r.w) * r.h * map.channels, 0.0f);
+          p.significant.assign(size_t(r.w) * r.h, 0);
+          for (int y = 0; y < r.h; ++y) {
+            for (int x = 0; x < r.w; ++x) {
+              for (int c = 0; c < map.channels; ++c) {
+                p.values[(size_t(y) * r.w + x) * map.channels + c] =
+                    std::max(sign * map.at(r.x + x, r.y + y, c), 0.0f);
+              }
+              p.significant[size_t(y) * r.w + x] =
+                  significant_at(map, r.x + x, r.y + y, sign, threshold) ? 1 : 0;
+            }
+          }
+          out.push_back(std::move(p));
+        }
+      }
+    }
+  }
+}
+
+bool collapse_untinted(SourcePatch& patch, float* spread) {
+  *spread = 0.0f;
+  if (patch.channels != 3) return false;
+  const size_t n = patch.values.size() / 3;
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    *spread = std::max(*spread, std::max({v[0], v[1], v[2]}) - std::min({v[0], v[1], v[2]}));
+  }
+  if (*spread > patch.threshold) return false;
+  std::vector<float> grey(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    grey[i] = 0.5f * (std::max({v[0], v[1], v[2]}) + std::min({v[0], v[1], v[2]}));
+  }
+  patch.values = std::move(grey);
+  patch.channels = 1;
+  return true;
+}
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,47 @@
+// Cutting float maps into light patches (paper Alg. 4): per map and per layout region, the
+// bounding box of the texels whose value is significant at the output precision, one patch per
+// sign (a shadow map may be negative where an object adds bounce light).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lightpatch/cooker/layout.h"
+#include "lightpatch/cooker/maps.h"
+
+namespace lightpatch::cooker {
+
+struct SourcePatch {
+  uint16_t kind = 0;  // pack::GroupKind
+  int light = -1;     // pack light index (BakedMaps::lights position) or -1
+  int object = -1;    // pack object index or -1
+  int object_b = -1;  // second object of a pair correction, or -1
+  bool negative = false;
+  int channels = 1;   // 1 or 3
+  Rect dest;          // in the light map
+  // Magnitudes (sign removed, >= 0), dest.w * dest.h * channels, row-major from the top.
+  std::vector<float> values;
+  // Per texel: 1 where the value (of this patch's sign) is significant; errors are measured there.
+  std::vector<uint8_t> significant;
+  float weight = 1.0f;     // to final-map units at the authored state (a_l for C_l/S_ol, 1 for B)
+  float threshold = 0.0f;  // significance threshold in this map's units (half an output step)
+};
+
+// Significance rule: a texel is significant for sign s when some channel has s * v > threshold,
+// threshold = 0.5 * output_step / a (half an 8-bit step of the final map at the authored exposure;
+// a = 1 for B, a = the light's authored max(colour) * intensity for C_l and S_ol, floored at 1/100
+// of the brightest light's, as the baker does). Values below it round away in the 8-bit output.
+// Patches larger than max_dim are cut into tiles; each tile is shrunk to its own significant box.
+// Throws CookError on a non-finite value (naming `what` and the texel).
+void extract_patches(const FloatImage& map, const std::vector<Region>& regions, float threshold,
+                     int max_dim, const SourcePatch& prototype, const std::string& what,
+                     std::vector<SourcePatch>& out);
+
+// Colour decision for a 3-channel patch (bounce light tinted by albedos): where every texel's
+// channels lie within `threshold` of each other (max - min), the tint is below the 8-bit step
+// and the patch becomes one channel holding (max + min) / 2, within threshold / 2 of every
+// channel. Returns true if it collapsed; `spread` receives the patch's largest max - min.
+bool collapse_untinted(SourcePatch& patch, float* spread);
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,119 @@
+#include "lightpatch/cooker/state_spec.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/io.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+using nlohmann::json;
+
+std::string type_name(const json& j) { return j.type_name(); }
+
+float finite_non_negative(const json& j, const std::string& where) {
+  if (!j.is_number()) throw CookError(where + " must be a number, got " + type_name(j));
+  const double v = j.get<double>();
+  if (!std::isfinite(v) || v < 0.0 || v > 3.0e38) {
+    throw CookError(where + " must be a finite non-negative number, got " + j.dump());
+  }
+  return static_cast<float>(v);
+}
+
+LightOverride parse_light(const json& j, const std::string& where) {
+  if (!j.is_object()) throw CookError(where + " must be an object, got " + type_name(j));
+  LightOverride o;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
+    const std::string at = where + "." + key;
+    if (key == "on") {
+      if (!it->is_boolean()) throw CookError(at + " must be true or false, got " + it->dump());
+      o.has_on = true;
+      o.on = it->get<bool>();
+    } else if (key == "color") {
+      if (!it->is_array() || it->size() != 3) {
+        throw CookError(at + " must be an array of 3 numbers, got " + it->dump());
+      }
+      for (int c = 0; c < 3; ++c) {
+        o.color[c] = finite_non_negative((*it)[c], at + "[" + std::to_string(c) + "]");
+      }
+      o.has_color = true;
+    } else if (key == "intensity") {
+      o.intensity = finite_non_negative(*it, at);
+      o.has_intensity = true;
+    } else {
+      throw CookError(at + ": unknown key (expected on, color, intensity)");
+    }
+  }
+  return o;
+}
+
+}  // namespace
+
+StateSpec parse_state_json(const std::string& text, const std::string& what) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw CookError(what + ": invalid JSON: " + e.what());
+  }
+  if (!root.is_object()) throw CookError(what + ": a state must be a JSON object, got " + type_name(root));
+  StateSpec spec;
+  for (auto it = root.begin(); it != root.end(); ++it) {
+    const std::string& key = it.key();
+    if (key == "lights") {
+      if (!it->is_object()) throw CookError(what + ": \"lights\" must be an object, got " + type_name(*it));
+      for (auto l = it->begin(); l != it->end(); ++l) {
+        spec.lights[l.key()] = parse_light(*l, what + ": lights." + l.key());
+      }
+    } else if (key == "objects") {
+      if (!it->is_object()) throw CookError(what + ": \"objects\" must be an object, got " + type_name(*it));
+      for (auto o = it->begin(); o != it->end(); ++o) {
+        const std::string at = what + ": objects." + o.key();
+        if (!o->is_object()) throw CookError(at + " must be an object, got " + type_name(*o));
+        bool visible = true;
+        for (auto f = o->begin(); f != o->end(); ++f) {
+          if (f.key() != "visible") throw CookError(at + "." + f.key() + ": unknown key (expected visible)");
+          if (!f->is_boolean()) throw CookError(at + ".visible must be true or false, got " + f->dump());
+          visible = f->get<bool>();
+        }
+        spec.objects[o.key()] = visible;
+      }
+    } else {
+      throw CookError(what + ": unknown key \"" + key + "\" (expected lights, objects)");
+    }
+  }
+  return spec;
+}
+
+StateSpec load_state_file(const std::string& path) {
+  const std::vector<uint8_t> bytes = read_file(path);
+  return parse_state_json(std::string(bytes.begin(), bytes.end()), path);
+}
+
+std::vector<StateSpec> load_states_jsonl(const std::string& path) {
+  const std::vector<uint8_t> bytes = read_file(path);
+  const std::string text(bytes.begin(), bytes.end());
+  std::vector<StateSpec> out;
+  size_t start = 0;
+  int line = 0;
+  while (start <= text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    ++line;
+    const std::string row = text.substr(start, end - start);
+    if (row.find_first_not_of(" \t\r") != std::string::npos) {
+      out.push_back(parse_state_json(row, path + ":" + std::to_string(line)));
+    }
+    start = end + 1;
+  }
+  if (out.empty()) throw CookError(path + ": no states (one JSON object per line expected)");
+  return out;
+}
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,566 @@
+// Light-map parameterization (seed 004 §6.1-6.2, §6.9). Either every mesh's TEXCOORD_1 verbatim,
+// checked for overlaps, or an automatic unwrap: per mesh, charts grown across shared edges while
+// the face normal stays within kChartCos of the chart's seed, projected on the seed's plane with
+// overlap rejection, rotated to their tightest box; charts packed per region (one glTF node) and
+// regions packed into one square page, largest first. Everything is ordered by index, so the same
+// scene and options give the same layout.
+#include "lightpatch/cooker/unwrap.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <numeric>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+#include <vector>
+
+#include "lightpatch/cooker/error.h"
+#include "uv_overlap.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+// A face joins a chart while its normal is within ~37 degrees of the chart's seed: planar
+// projection then stretches texels by at most 1/0.8 and never flips a triangle.
+constexpr float kChartCos = 0.8f;
+// Target surface texels of the default density: a room-sized scene gets a page of about 512².
+constexpr double kDefaultSurfaceTexels = 512.0 * 512.0 * 0.6;
+constexpr int kMinPage = 16;
+// Each retry at a lower density shrinks it by this factor.
+constexpr float kDensityStep = 0.9f;
+
+struct Chart {
+  int mesh = 0;
+  std::vector<uint32_t> triangles;   // triangle indices in the mesh
+  std::vector<glm::vec2> corner_uv;  // 3 per triangle: world-unit plane coordinates, min at 0
+  glm::vec2 size{0.0f};              // world units
+  // Placement, filled by packing (texels).
+  int rect_w = 0, rect_h = 0;
+  int x = 0, y = 0;
+};
+
+struct RegionCharts {
+  Region region;
+  std::vector<int> charts;  // into the chart list
+  int w = 0, h = 0;         // packed size (texels)
+  int x = 0, y = 0;         // in the page
+};
+
+float triangle_area(const MeshInstance& m, size_t t) {
+  const glm::vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
+                  c = m.positions[m.indices[3 * t + 2]];
+  return 0.5f * glm::length(glm::cross(b - a, c - a));
+}
+
+glm::vec3 face_normal(const MeshInstance& m, size_t t) {
+  const glm::vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
+                  c = m.positions[m.indices[3 * t + 2]];
+  const glm::vec3 n = glm::cross(b - a, c - a);
+  const float len = glm::length(n);
+  // Import drops zero-area triangles; a scene built in code may still hold one.
+  return len > 0.0f ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
+}
+
+// Orthonormal tangent frame of a plane normal, chosen from the world axis least aligned with it so
+// that axis-aligned walls get axis-aligned charts.
+void plane_basis(const glm::vec3& n, glm::vec3* t, glm::vec3* b) {
+  const glm::vec3 a = std::abs(n.x) <= std::abs(n.y) && std::abs(n.x) <= std::abs(n.z)
+                          ? glm::vec3(1, 0, 0)
+                          : (std::abs(n.y) <= std::abs(n.z) ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
+  *t = glm::normalize(glm::cross(a, n));
+  *b = glm::cross(n, *t);
+}
+
+// Vertex welding by exact position so charts grow across edges of split vertices.
+struct PositionKey {
+  float x, y, z;
+  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PositionHash {
+  size_t operator()(const PositionKey& k) const {
+    uint32_t bits[3];
+    std::memcpy(bits, &k, sizeof(bits));
+    uint64_t h = 1469598103934665603ull;
+    for (uint32_t b : bits) h = (h ^ b) * 1099511628211ull;
+    return static_cast<size_t>(h);
+  }
+};
+
+// Triangle adjacency through shared (welded) edges: for each triangle edge, the other triangles.
+std::vector<std::vector<uint32_t>> build_adjacency(const MeshInstance& m) {
+  std::unordered_map<PositionKey, uint32_t, PositionHash> weld;
+  std::vector<uint32_t> id(m.positions.size());
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    const glm::vec3 p = m.positions[i];
+    id[i] = weld.emplace(PositionKey{p.x, p.y, p.z}, static_cast<uint32_t>(weld.size())).first->second;
+  }
+  const size_t nt = m.indices.size() / 3;
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>> edges;
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = id[m.indices[3 * t + k]], b = id[m.indices[3 * t + (k + 1) % 3]];
+      if (a > b) std::swap(a, b);
+      if (a != b) edges[{a, b}].push_back(static_cast<uint32_t>(t));
+    }
+  std::vector<std::vector<uint32_t>> adj(nt);
+  for (const auto& [key, tris] : edges)
+    for (uint32_t a : tris)
+      for (uint32_t b : tris)
+        if (a != b) adj[a].push_back(b);
+  for (auto& a : adj) {
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  return adj;
+}
+
+// Rotates a chart's plane coordinates to the tightest axis-aligned box among the directions of its
+// edges, then moves its minimum to the origin.
+void fit_chart_box(Chart& c) {
+  std::vector<std::pair<float, glm::vec2>> dirs;
+  for (size_t i = 0; i < c.corner_uv.size(); i += 3)
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec2 d = c.corner_uv[i + (k + 1) % 3] - c.corner_uv[i + k];
+      const float len = glm::length(d);
+      if (len > 0.0f) dirs.push_back({len, d / len});
+    }
+  std::stable_sort(dirs.begin(), dirs.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (dirs.size() > 32) dirs.resize(32);
+  glm::vec2 best_axis(1.0f, 0.0f);
+  float best_area = std::numeric_limits<float>::max();
+  for (const auto& [len, d] : dirs) {
+    glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (const glm::vec2& p : c.corner_uv) {
+      const glm::vec2 q(d.x * p.x + d.y * p.y, -d.y * p.x + d.x * p.y);
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    const float area = (hi.x - lo.x) * (hi.y - lo.y);
+    // Strictly smaller by a margin, so near-ties keep the earlier (longer) edge's direction.
+    if (area < best_area * 0.999f) {
+      best_area = area;
+      best_axis = d;
+    }
+  }
+  glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (glm::vec2& p : c.corner_uv) {
+    p = glm::vec2(best_axis.x * p.x + best_axis.y * p.y, -best_axis.y * p.x + best_axis.x * p.y);
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  // Keep the longer side horizontal: shelves pack flat charts better.
+  const bool swap = (hi.y - lo.y) > (hi.x - lo.x);
+  for (glm::vec2& p : c.corner_uv) {
+    p -= lo;
+    if (swap) p = glm::vec2(p.y, p.x);
+  }
+  c.size = swap ? glm::vec2(hi.y - lo.y, hi.x - lo.x) : hi - lo;
+  // A swap mirrors the chart; restore the winding so every chart keeps the same orientation.
+  if (swap)
+    for (glm::vec2& p : c.corner_uv) p.y = c.size.y - p.y;
+}
+
+// Grows the charts of one mesh.
+void grow_charts(const MeshInstance& m, int mesh_index, std::vector<Chart>& out) {
+  const size_t nt = m.indices.size() / 3;
+  const auto adj = build_adjacency(m);
+  std::vector<float> area(nt);
+  std::vector<glm::vec3> normal(nt);
+  for (size_t t = 0; t < nt; ++t) {
+    area[t] = triangle_area(m, t);
+    normal[t] = face_normal(m, t);
+  }
+  // Seeds in order of decreasing area (ties by index): big flat faces anchor charts.
+  std::vector<uint32_t> order(nt);
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return area[a] > area[b]; });
+  std::vector<uint8_t> taken(nt, 0);
+  for (uint32_t seed : order) {
+    if (taken[seed]) continue;
+    Chart c;
+    c.mesh = mesh_index;
+    const glm::vec3 n = normal[seed];
+    glm::vec3 tu, tv;
+    plane_basis(n, &tu, &tv);
+    auto project = [&](uint32_t t, glm::vec2 out3[3]) {
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3 p = m.positions[m.indices[3 * t + k]];
+        out3[k] = glm::vec2(glm::dot(p, tu), glm::dot(p, tv));
+      }
+    };
+    UvOverlapGrid grid;
+    std::vector<uint32_t> queue{seed};
+    taken[seed] = 1;
+    size_t head = 0;
+    while (head < queue.size()) {
+      const uint32_t t = queue[head++];
+      glm::vec2 tri[3];
+      project(t, tri);
+      if (t != seed && grid.overlaps(tri)) {
+        taken[t] = 0;  // rejected: it will seed or join another chart
+        continue;
+      }
+      grid.insert(tri);
+      c.triangles.push_back(t);
+      c.corner_uv.insert(c.corner_uv.end(), tri, tri + 3);
+      for (uint32_t nb : adj[t]) {
+        if (taken[nb] || glm::dot(normal[nb], n) < kChartCos) continue;
+        taken[nb] = 1;
+        queue.push_back(nb);
+      }
+    }
+    // Rejected neighbours were released; later seeds pick them up.
+    fit_chart_box(c);
+    out.push_back(std::move(c));
+  }
+}
+
+// Shelf packing of rectangles (largest height first, ties by index) into a strip `width` wide.
+// Returns the height used, or -1 if some rectangle is wider than the strip.
+int shelf_pack(std::vector<std::pair<int, int>>& sizes, std::vector<std::pair<int, int>>& pos,
+               int width) {
+  std::vector<size_t> order(sizes.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    if (sizes[a].second != sizes[b].second) return sizes[a].second > sizes[b].second;
+    return sizes[a].first > sizes[b].first;
+  });
+  pos.assign(sizes.size(), {0, 0});
+  int x = 0, y = 0, shelf_h = 0;
+  for (size_t i : order) {
+    const auto [w, h] = sizes[i];
+    if (w > width) return -1;
+    if (x + w > width) {
+      y += shelf_h;
+      x = 0;
+      shelf_h = 0;
+    }
+    pos[i] = {x, y};
+    x += w;
+    shelf_h = std::max(shelf_h, h);
+  }
+  return y + shelf_h;
+}
+
+struct Packed {
+  bool fits = false;
+  int page = 0;    // width (texels)
+  int height = 0;  // the page's rows actually used, rounded up to 4 (the square page when fixed)
+};
+
+// Sizes every chart at density `tpu`, packs charts per region and regions into the smallest
+// square page (a multiple of 4) that holds them, at most `max_page`, or exactly `fixed_page`.
+Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, float tpu,
+                int border, int fixed_page, int max_page) {
+  for (Chart& c : charts) {
+    c.rect_w = std::max(1, static_cast<int>(std::ceil(c.size.x * tpu))) + 2 * border;
+    c.rect_h = std::max(1, static_cast<int>(std::ceil(c.size.y * tpu))) + 2 * border;
+  }
+  int64_t total = 0;
+  for (RegionCharts& r : regions) {
+    std::vector<std::pair<int, int>> sizes, pos;
+    int64_t area = 0;
+    int widest = 0;
+    for (int ci : r.charts) {
+      sizes.push_back({charts[size_t(ci)].rect_w, charts[size_t(ci)].rect_h});
+      area += int64_t(charts[size_t(ci)].rect_w) * charts[size_t(ci)].rect_h;
+      widest = std::max(widest, charts[size_t(ci)].rect_w);
+    }
+    const int strip = std::max(widest, static_cast<int>(std::ceil(std::sqrt(double(area) * 1.15))));
+    r.h = shelf_pack(sizes, pos, strip);
+    r.w = 0;
+    for (size_t k = 0; k < r.charts.size(); ++k) {
+      Chart& c = charts[size_t(r.charts[k])];
+      c.x = pos[k].first;
+      c.y = pos[k].second;
+      r.w = std::max(r.w, c.x + c.rect_w);
+    }
+    total += int64_t(r.w) * r.h;
+  }
+  std::vector<std::pair<int, int>> sizes, pos;
+  for (const RegionCharts& r : regions) sizes.push_back({r.w, r.h});
+  int used = 0;
+  auto fits = [&](int page) {
+    used = shelf_pack(sizes, pos, page);
+    return used >= 0 && used <= page;
+  };
+  Packed result;
+  if (fixed_page > 0) {
+    result.page = fixed_page;
+    result.fits = fits(fixed_page);
+  } else {
+    int page = std::max(kMinPage, (static_cast<int>(std::ceil(std::sqrt(double(total)))) + 3) / 4 * 4);
+    while (page <= max_page && !fits(page)) page += std::max(4, page / 32 / 4 * 4);
+    result.page = std::min(page, max_page);
+    result.fits = page <= max_page && fits(result.page);
+  }
+  // A page of fixed size stays square; a derived one ends below its last shelf.
+  result.height = fixed_page > 0 ? fixed_page : std::max(kMinPage, (used + 3) / 4 * 4);
+  if (result.fits)
+    for (size_t i = 0; i < regions.size(); ++i) {
+      regions[i].x = pos[i].first;
+      regions[i].y = pos[i].second;
+    }
+  return result;
+}
+
+double total_area(const Scene& scene) {
+  double a = 0.0;
+  for (const MeshInstance& m : scene.meshes)
+    for (size_t t = 0; t < m.indices.size() / 3; ++t) a += triangle_area(m, t);
+  return a;
+}
+
+// Regions: one per glTF node (meshes sharing node_index), one per mesh for scenes built in code.
+std::vector<Region> make_regions(const Scene& scene) {
+  std::vector<Region> regions;
+  std::map<int, size_t> by_node;
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    const MeshInstance& m = scene.meshes[i];
+    if (m.node_index >= 0) {
+      auto it = by_node.find(m.node_index);
+      if (it != by_node.end()) {
+        regions[it->second].meshes.push_back(int(i));
+        continue;
+      }
+      by_node[m.node_index] = regions.size();
+    }
+    Region r;
+    r.name = m.name;
+    r.object = m.object;
+    r.meshes.push_back(int(i));
+    regions.push_back(std::move(r));
+  }
+  return regions;
+}
+
+// A mesh as the user knows it: its node's name, or the node's index when the node has no name.
+std::string mesh_label(const MeshInstance& m) {
+  if (!m.name.empty()) return "mesh '" + m.name + "'";
+  return m.node_index >= 0 ? "the mesh of node " + std::to_string(m.node_index)
+                           : std::string("an unnamed mesh");
+}
+
+Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
+  Layout layout;
+  layout.verbatim_uv1 = true;
+  // The page: the requested size, or one that gives the requested (or default) density to the
+  // scene's surface if its UVs fill the page.
+  int page = options.lightmap_size;
+  const double area = std::max(total_area(scene), 1e-30);
+  if (page <= 0) {
+    const double tpu = options.texels_per_unit > 0.0f ? options.texels_per_unit
+                                                      : std::sqrt(kDefaultSurfaceTexels / area);
+    page = static_cast<int>(std::ceil(std::sqrt(area) * tpu * 1.3));
+    page = std::clamp((page + 3) / 4 * 4, kMinPage, options.max_lightmap_size);
+  }
+  layout.width = layout.height = page;
+  layout.texels_per_unit = static_cast<float>(page / std::sqrt(area) / 1.3);
+
+  // Overlap check across every mesh: two triangles may share edges and corners, not area.
+  UvOverlapGrid grid;
+  std::vector<int> owner;  // mesh of each inserted triangle
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    const MeshInstance& m = scene.meshes[mi];
+    MeshLayout ml;
+    ml.source_vertex.resize(m.positions.size());
+    std::iota(ml.source_vertex.begin(), ml.source_vertex.end(), 0u);
+    ml.uv = m.uv1;
+    ml.indices = m.indices;
+    for (size_t t = 0; t < m.indices.size() / 3; ++t) {
+      glm::vec2 tri[3];
+      for (int k = 0; k < 3; ++k) tri[k] = m.uv1[m.indices[3 * t + k]] * float(page);
+      int other = -1;
+      if (grid.overlaps(tri, &other)) {
+        const MeshInstance& o = scene.meshes[size_t(owner[size_t(other)])];
+        throw CookError("TEXCOORD_1 of " + mesh_label(m) + " (primitive " +
+                        std::to_string(m.primitive_index) + ") has triangle " + std::to_string(t) +
+                        " overlapping " +
+                        (&o == &m ? std::string("another of its own triangles")
+                                  : mesh_label(o)) +
+                        " in the light map; light-map UVs must not overlap");
+      }
+      grid.insert(tri);
+      owner.push_back(int(mi));
+    }
+    layout.meshes.push_back(std::move(ml));
+  }
+
+  // Regions: the texel bounding box of each node's triangles, one texel of margin for filtering;
+  // overlapping boxes are merged so that no texel belongs to two regions.
+  std::vector<Region> regions = make_regions(scene);
+  for (Region& r : regions) {
+    glm::vec2 lo(1.0f), hi(0.0f);
+    for (int mi : r.meshes)
+      for (uint32_t i : scene.meshes[size_t(mi)].indices) {
+        lo = glm::min(lo, scene.meshes[size_t(mi)].uv1[i]);
+        hi = glm::max(hi, scene.meshes[size_t(mi)].uv1[i]);
+      }
+    const int x0 = std::max(0, static_cast<int>(std::floor(lo.x * page)) - 1);
+    const int y0 = std::max(0, static_cast<int>(std::floor(lo.y * page)) - 1);
+    const int x1 = std::min(page, static_cast<int>(std::ceil(hi.x * page)) + 1);
+    const int y1 = std::min(page, static_cast<int>(std::ceil(hi.y * page)) + 1);
+    r.rect = Rect{x0, y0, std::max(1, x1 - x0), std::max(1, y1 - y0)};
+  }
+  auto overlap = [](const Rect& a, const Rect& b) {
+    return a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
+  };
+  bool merged = true;
+  int merges = 0;
+  while (merged) {
+    merged = false;
+    for (size_t i = 0; i < regions.size() && !merged; ++i)
+      for (size_t j = i + 1; j < regions.size() && !merged; ++j) {
+        if (!overlap(regions[i].rect, regions[j].rect)) continue;
+        Region& a = regions[i];
+        const Region& b = regions[j];
+        const int x0 = std::min(a.rect.x, b.rect.x), y0 = std::min(a.rect.y, b.rect.y);
+        const int x1 = std::max(a.rect.x + a.rect.w, b.rect.x + b.rect.w);
+        const int y1 = std::max(a.rect.y + a.rect.h, b.rect.y + b.rect.h);
+        a.rect = Rect{x0, y0, x1 - x0, y1 - y0};
+        a.name += "+" + b.name;
+        if (a.object != b.object) a.object = -1;
+        a.meshes.insert(a.meshes.end(), b.meshes.begin(), b.meshes.end());
+        regions.erase(regions.begin() + std::ptrdiff_t(j));
+        merged = true;
+        ++merges;
+      }
+  }
+  if (merges > 0)
+    layout.notes.push_back("TEXCOORD_1: " + std::to_string(merges) +
+                           " node(s) share light-map bounding boxes and were merged into one "
+                           "patch region");
+  layout.regions = std::move(regions);
+  return layout;
+}
+
+// Edges whose two triangles share both source vertices (a smooth surface) but not both layout
+// vertices (the unwrap cut there).
+std::vector<SeamEdge> find_seams(const Scene& scene, const Layout& layout) {
+  std::vector<SeamEdge> seams;
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    const MeshInstance& m = scene.meshes[mi];
+    const MeshLayout& ml = layout.meshes[mi];
+    // Source edge (sorted) -> first (layout start, layout end) seen, oriented as the source edge.
+    std::map<std::pair<uint32_t, uint32_t>, std::pair<uint32_t, uint32_t>> first;
+    for (size_t t = 0; t < m.indices.size() / 3; ++t)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t s0 = m.indices[3 * t + k], s1 = m.indices[3 * t + (k + 1) % 3];
+        uint32_t l0 = ml.indices[3 * t + k], l1 = ml.indices[3 * t + (k + 1) % 3];
+        if (s0 > s1) {
+          std::swap(s0, s1);
+          std::swap(l0, l1);
+        }
+        auto [it, inserted] = first.emplace(std::make_pair(s0, s1), std::make_pair(l0, l1));
+        if (inserted || (it->second.first == l0 && it->second.second == l1)) continue;
+        seams.push_back(SeamEdge{ml.uv[it->second.first], ml.uv[it->second.second], ml.uv[l0],
+                                 ml.uv[l1]});
+      }
+  }
+  return seams;
+}
+
+}  // namespace
+
+Layout build_layout(const Scene& scene, const LayoutOptions& options) {
+  if (scene.meshes.empty()) throw CookError("the scene has no meshes to bake");
+  size_t with_uv1 = 0;
+  for (const MeshInstance& m : scene.meshes) with_uv1 += m.uv1.empty() ? 0 : 1;
+  if (with_uv1 == scene.meshes.size()) return verbatim_layout(scene, options);
+
+  Layout layout;
+  if (with_uv1 > 0)
+    layout.notes.push_back("TEXCOORD_1 ignored: only " + std::to_string(with_uv1) + " of " +
+                           std::to_string(scene.meshes.size()) +
+                           " meshes have one; the whole scene was unwrapped");
+
+  std::vector<Chart> charts;
+  for (size_t i = 0; i < scene.meshes.size(); ++i) grow_charts(scene.meshes[i], int(i), charts);
+
+  std::vector<RegionCharts> regions;
+  {
+    std::vector<Region> rs = make_regions(scene);
+    std::vector<int> region_of_mesh(scene.meshes.size(), -1);
+    for (size_t r = 0; r < rs.size(); ++r)
+      for (int mi : rs[r].meshes) region_of_mesh[size_t(mi)] = int(r);
+    for (Region& r : rs) regions.push_back(RegionCharts{std::move(r), {}, 0, 0, 0, 0});
+    for (size_t c = 0; c < charts.size(); ++c)
+      regions[size_t(region_of_mesh[size_t(charts[c].mesh)])].charts.push_back(int(c));
+  }
+
+  const double area = std::max(total_area(scene), 1e-30);
+  const float requested = options.texels_per_unit > 0.0f
+                              ? options.texels_per_unit
+                              : static_cast<float>(std::sqrt(kDefaultSurfaceTexels / area));
+  const int max_page = std::clamp(options.max_lightmap_size, kMinPage, 16384);
+  float tpu = requested;
+  Packed packed;
+  for (int attempt = 0; attempt < 200; ++attempt) {
+    packed = pack_all(charts, regions, tpu, options.border_texels, options.lightmap_size, max_page);
+    if (packed.fits) break;
+    tpu *= kDensityStep;
+  }
+  if (!packed.fits) {
+    throw CookError("the light-map charts (" + std::to_string(charts.size()) +
+                    ") do not fit a " + std::to_string(options.lightmap_size > 0 ? options.lightmap_size : max_page) +
+                    "² page even at a very low density; raise --lightmap-size");
+  }
+  if (tpu < requested) {
+    char buf[256];
+    std::snprintf(buf, sizeof(buf),
+                  "texel density lowered from %.4g to %.4g texels/m so that %zu charts fit a %dx%d "
+                  "light map",
+                  double(requested), double(tpu), charts.size(), packed.page, packed.height);
+    layout.notes.push_back(buf);
+  }
+  layout.width = packed.page;
+  layout.height = packed.height;
+  layout.texels_per_unit = tpu;
+  layout.meshes.resize(scene.meshes.size());
+
+  // Layout vertices: one per (chart, source vertex), so vertices split exactly where charts cut.
+  const glm::vec2 inv(1.0f / float(layout.width), 1.0f / float(layout.height));
+  std::vector<std::map<uint32_t, uint32_t>> vertex_of(scene.meshes.size());
+  std::vector<std::vector<uint32_t>> tri_indices(scene.meshes.size());
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi)
+    tri_indices[mi].assign(scene.meshes[mi].indices.size(), 0);
+  for (const RegionCharts& r : regions) {
+    for (int ci : r.charts) {
+      const Chart& c = charts[size_t(ci)];
+      const MeshInstance& m = scene.meshes[size_t(c.mesh)];
+      MeshLayout& ml = layout.meshes[size_t(c.mesh)];
+      std::map<uint32_t, uint32_t> local;  // source vertex -> layout vertex of this chart
+      const glm::vec2 origin(float(r.x + c.x + options.border_texels),
+                             float(r.y + c.y + options.border_texels));
+      for (size_t k = 0; k < c.triangles.size(); ++k) {
+        const uint32_t t = c.triangles[k];
+        for (int j = 0; j < 3; ++j) {
+          const uint32_t src = m.indices[3 * t + j];
+          auto [it, inserted] = local.emplace(src, uint32_t(ml.uv.size()));
+          if (inserted) {
+            ml.source_vertex.push_back(src);
+            ml.uv.push_back((origin + c.corner_uv[3 * k + j] * tpu) * inv);
+          }
+          tri_indices[size_t(c.mesh)][3 * t + j] = it->second;
+        }
+      }
+    }
+  }
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi)
+    layout.meshes[mi].indices = std::move(tri_indices[mi]);
+  layout.seams = find_seams(scene, layout);
+  for (RegionCharts& r : regions) {
+    r.region.rect = Rect{r.x, r.y, r.w, r.h};
+    layout.regions.push_back(std::move(r.region));
+  }
+  return layout;
+}
+
+}  // namespace lightpatch::cooker

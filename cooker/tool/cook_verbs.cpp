@@ -1,0 +1,209 @@
+// The `cook` and `bake-state` verbs: glTF in, a pack (cook) or one state's float map (bake-state)
+// out. Both run the same import, layout and texel stages with the same options, so both give the
+// same light-map layout.
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "args.h"
+#include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/import.h"
+#include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/pack_builder.h"
+#include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/report.h"
+#include "lightpatch/cooker/texel_builder.h"
+#include "lightpatch/cooker/tracer.h"
+#include "lightpatch/cooker/unwrap.h"
+#include "verbs.h"
+
+namespace lightpatch::tool {
+
+namespace {
+
+using namespace lightpatch::cooker;
+
+struct CookOptions {
+  std::string scene_path;
+  std::string output;
+  std::string report_path;
+  LayoutOptions layout;
+  BakeOptions bake;
+  bool quiet = false;
+};
+
+// Options shared by cook and bake-state (DESIGN.md, Command line). Options first: a positional
+// is any item not starting with '-', which an option's value could be.
+CookOptions parse_common(Args& args, const char* output_what) {
+  CookOptions o;
+  if (!args.option("-o", &o.output) && !args.option("--output", &o.output)) {
+    throw ArgsError(std::string("missing -o ") + output_what);
+  }
+  if (o.output.empty()) throw ArgsError("-o needs a file name");
+  o.layout.lightmap_size = args.int_option("--lightmap-size", 0, 8, 16384);
+  o.layout.texels_per_unit = args.float_option("--texels-per-unit", 0.0f, 1e-6f, 1e6f);
+  std::string quality;
+  if (args.option("--quality", &quality)) {
+    try {
+      o.bake.quality = parse_quality(quality);
+    } catch (const CookError& e) {
+      throw ArgsError(e.what());
+    }
+  }
+  args.option("--report", &o.report_path);
+  // Indirect light and sampling: overrides of the quality preset (0 keeps the preset's value).
+  o.bake.indirect = !args.flag("--no-indirect");
+  o.bake.photons = args.int_option("--photons", 0, 1, 100'000'000);
+  o.bake.virtual_lights = args.int_option("--virtual-lights", 0, 1, 1'000'000);
+  o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
+  o.bake.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
+  o.bake.threads = args.int_option("--threads", 0, 1, 1024);
+  o.quiet = args.flag("--quiet", "-q");
+  return o;
+}
+
+// Fails early, before a long cook, when the output's folder cannot take a file.
+void probe_output_folder(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  std::string probe = dir + "/.lightpatch-probe.XXXXXX";
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) throw CookError("cannot write into '" + dir + "' (for '" + path + "')");
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
+struct Prepared {
+  Scene scene;
+  Layout layout;
+  std::unique_ptr<Tracer> tracer;
+  TexelSet texels;
+};
+
+template <typename F>
+auto timed(Progress& progress, Report& report, const std::string& stage, F&& f) {
+  progress.begin(stage, 1);
+  auto result = f();
+  report.stage_time(stage, progress.end());
+  return result;
+}
+
+Prepared prepare(const CookOptions& o, Progress& progress, Report& report) {
+  Prepared p;
+  p.scene = timed(progress, report, "import", [&] { return import_gltf(o.scene_path); });
+  p.layout = timed(progress, report, "layout", [&] { return build_layout(p.scene, o.layout); });
+  for (const std::string& note : p.layout.notes) progress.message("note: " + note);
+  p.tracer = timed(progress, report, "trace setup", [&] { return make_embree_tracer(p.scene); });
+  p.texels = timed(progress, report, "texels",
+                   [&] { return build_texels(p.scene, p.layout, p.tracer.get()); });
+
+  size_t valid = 0;
+  for (uint8_t v : p.texels.valid) valid += v ? 1 : 0;
+  int semi_lights = 0;
+  for (const Light& l : p.scene.lights) semi_lights += l.semi_dynamic ? 1 : 0;
+  std::lock_guard<std::mutex> lock(report.mutex());
+  nlohmann::json& s = report.root()["scene"];
+  s["path"] = o.scene_path;
+  s["triangles"] = p.scene.triangle_count();
+  s["meshes"] = p.scene.meshes.size();
+  s["lights"] = p.scene.lights.size();
+  s["semi_dynamic_lights"] = semi_lights;
+  s["objects"] = p.scene.objects.size();
+  s["scale_m"] = p.scene.scale();
+  nlohmann::json& l = report.root()["layout"];
+  l["width"] = p.layout.width;
+  l["height"] = p.layout.height;
+  l["texels_per_unit"] = p.layout.texels_per_unit;
+  l["verbatim_uv1"] = p.layout.verbatim_uv1;
+  l["regions"] = p.layout.regions.size();
+  l["notes"] = p.layout.notes;
+  l["texels"] = p.texels.position.size();
+  l["valid_texels"] = valid;
+  return p;
+}
+
+void finish_report(const CookOptions& o, Report& report, double seconds) {
+  if (o.report_path.empty()) return;
+  {
+    std::lock_guard<std::mutex> lock(report.mutex());
+    report.root()["total_seconds"] = seconds;
+  }
+  report.write(o.report_path);
+}
+
+double since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+int verb_cook(Args& args) {
+  CookOptions o = parse_common(args, "OUT.lpk");
+  o.scene_path = args.positional("SCENE");
+  args.finish();
+  const auto t0 = std::chrono::steady_clock::now();
+  probe_output_folder(o.output);
+  if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  Progress progress(o.quiet);
+  Report report;
+  Prepared p = prepare(o, progress, report);
+  BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, o.bake, progress, report);
+  progress.begin("finalize maps", 1 + maps.contribution.size() + maps.shadows.size());
+  finalize_map(maps.base, p.scene, p.layout, p.texels);
+  progress.advance();
+  for (FloatImage& c : maps.contribution) {
+    finalize_map(c, p.scene, p.layout, p.texels);
+    progress.advance();
+  }
+  for (ShadowMap& s : maps.shadows) {
+    finalize_map(s.map, p.scene, p.layout, p.texels);
+    progress.advance();
+  }
+  report.stage_time("finalize", progress.end());
+  const std::vector<uint8_t> pack = timed(progress, report, "pack", [&] {
+    return build_pack(p.scene, p.layout, maps, PackOptions{}, report);
+  });
+  progress.begin("write", 1);
+  write_file_atomic(o.output, pack.data(), pack.size());
+  report.stage_time("write", progress.end());
+  finish_report(o, report, since(t0));
+  progress.message("wrote " + o.output + " (" + std::to_string(pack.size()) + " bytes, " +
+                   std::to_string(maps.contribution.size()) + " lights, " +
+                   std::to_string(maps.shadows.size()) + " shadow pairs) in " +
+                   std::to_string(since(t0)) + " s");
+  return 0;
+}
+
+int verb_bake_state(Args& args) {
+  std::string state_path;
+  args.option("--state", &state_path);
+  CookOptions o = parse_common(args, "MAP.pfm");
+  o.scene_path = args.positional("SCENE");
+  args.finish();
+  const auto t0 = std::chrono::steady_clock::now();
+  const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
+  probe_output_folder(o.output);
+  if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  Progress progress(o.quiet);
+  Report report;
+  Prepared p = prepare(o, progress, report);
+  FloatImage map =
+      bake_state(p.scene, p.layout, p.texels, *p.tracer, state, o.bake, progress, report);
+  progress.begin("finalize maps", 1);
+  finalize_map(map, p.scene, p.layout, p.texels);
+  report.stage_time("finalize", progress.end());
+  progress.begin("write", 1);
+  write_pfm(o.output, map);
+  report.stage_time("write", progress.end());
+  finish_report(o, report, since(t0));
+  progress.message("wrote " + o.output + " (" + std::to_string(map.width) + "x" +
+                   std::to_string(map.height) + ") in " + std::to_string(since(t0)) + " s");
+  return 0;
+}
+
+}  // namespace lightpatch::tool

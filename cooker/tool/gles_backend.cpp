@@ -1,0 +1,83 @@
+// `recompose --backend gles`: the runtime on an EGL surfaceless context, driven like a game would
+// (state differences pushed as changes, update() until idle), then the light map read back.
+// Orientation: the runtime keeps texture row 0 = image top row (glTF v = 0), so glReadPixels'
+// first row is the top row and the returned array needs no flip.
+#include "gles_backend.h"
+
+#include <cstring>
+#include <string>
+
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/platform/egl_context.h"
+#include "lightpatch/runtime.h"
+#include "lightpatch/scene_state.h"
+#include "state_apply.h"
+
+namespace lightpatch::tool {
+namespace {
+
+using cooker::CookError;
+
+constexpr uint64_t kUnlimited = ~0ull >> 1;
+
+void settle(Runtime& runtime) {
+  // Each update() with an unlimited budget finishes a rebuild or applies every pending change;
+  // a drift-triggered rebuild may need one more.
+  for (int i = 0; i < 64 && !runtime.idle(); ++i) {
+    if (runtime.update(kUnlimited) != Status::kOk) throw CookError("GLES backend: GL error");
+  }
+  if (!runtime.idle()) throw CookError("GLES backend: the runtime did not settle");
+}
+
+void push(const SceneState& state, Runtime& runtime) {
+  for (uint32_t l = 0; l < state.light_count(); ++l) {
+    const LightState want = state.light(l);
+    const LightState have = runtime.light(l);
+    if (want.on == have.on && want.intensity == have.intensity &&
+        std::memcmp(want.color, have.color, sizeof want.color) == 0) {
+      continue;
+    }
+    if (runtime.set_light(l, want) != Status::kOk) {
+      throw CookError("GLES backend: light " + std::to_string(l) + ": value out of range");
+    }
+  }
+  for (uint32_t o = 0; o < state.object_count(); ++o) {
+    if (state.object_visible(o) != runtime.object_visible(o)) {
+      runtime.set_object_visible(o, state.object_visible(o));
+    }
+  }
+}
+
+}  // namespace
+
+void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& states,
+                    std::vector<float>* rgb) {
+  char message[256] = {};
+  platform::EglContext context;
+  if (!context.create_headless(message, sizeof message)) {
+    throw CookError(std::string("GLES backend: ") + message);
+  }
+  Error error;
+  Runtime runtime;
+  if (runtime.open(pack, RuntimeLimits(), &error) != Status::kOk) {
+    throw CookError(std::string("GLES backend: ") + status_name(error.status) + ": " +
+                    error.message);
+  }
+  SceneState state;
+  if (state.init(pack, &error) != Status::kOk) throw CookError(error.message);
+  settle(runtime);  // the initial full build of the authored state
+  for (const cooker::StateSpec& spec : states) {
+    apply_state(spec, pack, &state);
+    push(state, runtime);
+    settle(runtime);
+  }
+  const size_t texels = size_t(runtime.width()) * runtime.height();
+  std::vector<float> rgba(texels * 4);
+  if (runtime.read_light_map(rgba.data(), &error) != Status::kOk) throw CookError(error.message);
+  rgb->resize(texels * 3);
+  for (size_t i = 0; i < texels; ++i) {
+    for (int c = 0; c < 3; ++c) (*rgb)[i * 3 + c] = rgba[i * 4 + c];
+  }
+}
+
+}  // namespace lightpatch::tool

@@ -1,0 +1,123 @@
+// lightpatch: the cooker and the runtime's tools in one executable. See README.md for the verbs.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "args.h"
+#include "lightpatch/cooker/error.h"
+#include "verbs.h"
+
+namespace {
+
+struct Verb {
+  const char* name;
+  int (*run)(lightpatch::tool::Args&);
+  const char* usage;
+  const char* help;  // what the verb does and every option, for `lightpatch VERB --help`
+};
+
+constexpr const char* kCookOptionsHelp =
+    "  --lightmap-size N      light-map page width in texels (8..16384); the density follows\n"
+    "  --texels-per-unit F    texel density in texels per metre (default: about 160k surface\n"
+    "                         texels, a page near 512x512; lowered with a note if the charts do\n"
+    "                         not fit a 4096 page)\n"
+    "  --quality Q            draft | preview (default) | production: photons, virtual lights,\n"
+    "                         area-light samples and gather quality\n"
+    "  --no-indirect          direct light only (no photons, no bounce)\n"
+    "  --photons N            photons for the whole scene (overrides the quality preset)\n"
+    "  --virtual-lights N     virtual indirect lights for the whole scene (overrides the preset)\n"
+    "  --area-samples N       samples per texel for lights with a radius and emissive surfaces\n"
+    "  --seed N               random seed (same scene, options and seed: same maps)\n"
+    "  --threads N            worker threads (default: all cores)\n"
+    "  --report REPORT.json   write the cook's decisions, timings and measured errors\n"
+    "  -q, --quiet            no progress on stderr\n";
+
+constexpr const char* kCookHelp =
+    "Bakes a glTF 2.0 scene (.gltf/.glb) into a pack: base map, per-light contribution maps,\n"
+    "per-object shadow maps and pair corrections, quantized to 8-bit RGBA atlases.\n"
+    "Lights and mesh nodes with extras {\"semiDynamic\": true} become switchable.\n\n"
+    "options:\n"
+    "  -o, --output OUT.lpk   the pack (written atomically; an existing file survives a failure)\n";
+
+constexpr const char* kBakeStateHelp =
+    "Bakes one scene state directly, as a conventional light mapper would: the ground truth a\n"
+    "recomposition must match. Same layout as `cook` with the same options.\n\n"
+    "options:\n"
+    "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
+    "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
+    "                         authored, all on and visible)\n";
+
+const Verb kVerbs[] = {
+    {"cook", lightpatch::tool::verb_cook,
+     "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
+     "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--photons N] "
+     "[--virtual-lights N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
+     kCookHelp},
+    {"bake-state", lightpatch::tool::verb_bake_state,
+     "bake-state SCENE [--state STATE.json] -o MAP.pfm [cook's options]", kBakeStateHelp},
+    {"info", lightpatch::tool::verb_info, "info PACK [--json]",
+     "Prints a pack's lights, objects, groups, patches, atlases and bytes.\n\n"
+     "options:\n  --json   machine-readable output\n"},
+    {"verify", lightpatch::tool::verb_verify, "verify PACK",
+     "Checks a pack's header, sections, records and ranges as the runtime's loader does;\n"
+     "exit 0 when the runtime would accept it, 1 with the reason when not.\n"},
+    {"recompose", lightpatch::tool::verb_recompose,
+     "recompose PACK [--state STATE.json | --states STATES.jsonl] [--backend cpu|gles] -o MAP.pfm",
+     "Recomposes a scene state from a pack and writes the light map (linear float PFM).\n\n"
+     "options:\n"
+     "  -o, --output MAP.pfm   the light map\n"
+     "  --state STATE.json     one state (default: as authored)\n"
+     "  --states STATES.jsonl  states applied in order through the incremental path; the map\n"
+     "                         after the last is written\n"
+     "  --backend cpu|gles     CPU reference (default) or OpenGL ES 3 through EGL surfaceless\n"},
+    {"bench", lightpatch::tool::verb_bench, "bench PACK [--json]",
+     "Times the GLES recomposition of a pack (full rebuild, single changes) against a fill-rate\n"
+     "floor measured in the same run, and lists the GPU memory it holds.\n\n"
+     "options:\n  --json   machine-readable output\n"},
+};
+
+void usage(FILE* out) {
+  std::fprintf(out, "usage: lightpatch VERB ...\n\nverbs:\n");
+  for (const Verb& v : kVerbs) std::fprintf(out, "  lightpatch %s\n", v.usage);
+  std::fprintf(out, "\n`lightpatch VERB --help` lists a verb's options.\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  lightpatch::tool::Args args;
+  args.verb = argv[1];
+  for (int i = 2; i < argc; ++i) args.items.emplace_back(argv[i]);
+  for (const Verb& v : kVerbs) {
+    if (args.verb != v.name) continue;
+    for (const std::string& item : args.items) {
+      if (item == "--help" || item == "-h") {
+        std::printf("usage: lightpatch %s\n\n%s", v.usage, v.help);
+        if (v.run == lightpatch::tool::verb_cook || v.run == lightpatch::tool::verb_bake_state) {
+          std::printf("%s", kCookOptionsHelp);
+        }
+        return 0;
+      }
+    }
+    try {
+      return v.run(args);
+    } catch (const lightpatch::tool::ArgsError& e) {
+      std::fprintf(stderr, "lightpatch %s: %s\nusage: lightpatch %s\n", v.name, e.what(), v.usage);
+      return 2;
+    } catch (const lightpatch::cooker::CookError& e) {
+      std::fprintf(stderr, "lightpatch %s: error: %s\n", v.name, e.what());
+      return 1;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "lightpatch %s: error: %s\n", v.name, e.what());
+      return 1;
+    }
+  }
+  std::fprintf(stderr, "lightpatch: unknown verb '%s'\n", args.verb.c_str());
+  usage(stderr);
+  return 2;
+}

@@ -1,0 +1,234 @@
+// The pack verbs: `info`, `verify` and `recompose` (README.md; DESIGN.md, Command line).
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "args.h"
+#include "gles_backend.h"
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/state_spec.h"
+#include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/pack_view.h"
+#include "lightpatch/platform/file_mapping.h"
+#include "lightpatch/scene_state.h"
+#include "state_apply.h"
+#include "verbs.h"
+
+namespace lightpatch::tool {
+
+namespace {
+
+using cooker::CookError;
+
+// A mapped, validated pack. Throws CookError naming the file and the problem.
+struct OpenPack {
+  platform::FileMapping mapping;
+  PackView view;
+  explicit OpenPack(const std::string& path) {
+    char message[256] = {};
+    if (!mapping.open(path.c_str(), message, sizeof(message))) throw CookError(message);
+    Error error;
+    if (PackView::open(mapping.data(), mapping.size(), &view, &error) != Status::kOk) {
+      throw CookError(path + ": " + status_name(error.status) + ": " + error.message);
+    }
+  }
+};
+
+std::string name_string(const Name& n) { return std::string(n.data, n.length); }
+
+const char* section_label(uint32_t type) {
+  switch (type) {
+    case pack::kSectionLights: return "lights";
+    case pack::kSectionObjects: return "objects";
+    case pack::kSectionGroups: return "groups";
+    case pack::kSectionPatches: return "patches";
+    case pack::kSectionAtlases: return "atlases";
+    case pack::kSectionAtlasData: return "atlas_data";
+    case pack::kSectionStrings: return "strings";
+    case pack::kSectionMeshes: return "meshes";
+    case pack::kSectionMeshData: return "mesh_data";
+  }
+  return "unknown";
+}
+
+nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
+  nlohmann::ordered_json j;
+  j["file"] = path;
+  j["version"] = p.header().version;
+  j["bytes"] = p.size();
+  j["lightmap"] = {{"width", p.lightmap_width()}, {"height", p.lightmap_height()}};
+  nlohmann::ordered_json lights = nlohmann::ordered_json::array();
+  for (uint32_t i = 0; i < p.light_count(); ++i) {
+    const pack::LightRecord& l = p.light(i);
+    lights.push_back({{"name", name_string(p.light_name(i))},
+                      {"color", {l.color[0], l.color[1], l.color[2]}},
+                      {"intensity", l.intensity}});
+  }
+  nlohmann::ordered_json objects = nlohmann::ordered_json::array();
+  for (uint32_t i = 0; i < p.object_count(); ++i) objects.push_back(name_string(p.object_name(i)));
+  j["lights"] = lights;
+  j["objects"] = objects;
+  uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0, square = 0;
+  for (uint32_t i = 0; i < p.patch_count(); ++i) {
+    const pack::PatchRecord& r = p.patch(i);
+    by_kind[p.group(r.group).kind]++;
+    texels += uint64_t(r.width) * r.height * r.channel_count;
+    negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
+    one_channel += r.channel_count == 1 ? 1 : 0;
+    square += r.encoding == pack::kEncodingSquare ? 1 : 0;
+  }
+  j["groups"] = p.group_count();
+  j["patches"] = {{"total", p.patch_count()},
+                  {"base", by_kind[0]},
+                  {"contribution", by_kind[1]},
+                  {"shadow", by_kind[2]},
+                  {"pair_correction", by_kind[3]},
+                  {"static_shadow", by_kind[4]},
+                  {"negative", negative},
+                  {"one_channel", one_channel},
+                  {"three_channel", p.patch_count() - one_channel},
+                  {"square_encoded", square},
+                  {"channel_texels", texels}};
+  nlohmann::ordered_json atlases = nlohmann::ordered_json::array();
+  uint64_t atlas_bytes = 0;
+  for (uint32_t i = 0; i < p.atlas_count(); ++i) {
+    atlases.push_back({{"width", p.atlas(i).width}, {"height", p.atlas(i).height}});
+    atlas_bytes += uint64_t(p.atlas(i).width) * p.atlas(i).height * 4;
+  }
+  j["atlases"] = atlases;
+  j["meshes"] = p.mesh_count();
+  nlohmann::ordered_json sections = nlohmann::ordered_json::object();
+  const pack::SectionEntry* entries =
+      reinterpret_cast<const pack::SectionEntry*>(p.bytes() + sizeof(pack::Header));
+  for (uint32_t i = 0; i < p.header().section_count; ++i) sections[section_label(entries[i].type)] = entries[i].length;
+  j["section_bytes"] = sections;
+  j["bytes_per_patch_record"] = sizeof(pack::PatchRecord);
+  const uint64_t lightmap_bytes = uint64_t(p.lightmap_width()) * p.lightmap_height() * 3;
+  j["atlas_bytes"] = atlas_bytes;
+  j["conventional_lightmap_bytes"] = lightmap_bytes;
+  j["atlas_to_lightmap_ratio"] = double(atlas_bytes) / double(lightmap_bytes);
+  return j;
+}
+
+}  // namespace
+
+int verb_info(Args& args) {
+  const bool json = args.flag("--json");
+  const std::string path = args.positional("PACK");
+  args.finish();
+  OpenPack pack(path);
+  const nlohmann::ordered_json j = describe(pack.view, path);
+  if (json) {
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  const auto& pt = j["patches"];
+  std::printf("%s: lightpatch pack v%u, %llu bytes\n", path.c_str(), pack.view.header().version,
+              static_cast<unsigned long long>(pack.view.size()));
+  std::printf("light map      %ux%u\n", pack.view.lightmap_width(), pack.view.lightmap_height());
+  std::printf("lights         %u\n", pack.view.light_count());
+  for (const auto& l : j["lights"]) {
+    std::printf("  %s  colour (%g, %g, %g)  intensity %g\n", l["name"].get<std::string>().c_str(),
+                l["color"][0].get<double>(), l["color"][1].get<double>(), l["color"][2].get<double>(),
+                l["intensity"].get<double>());
+  }
+  std::printf("objects        %u\n", pack.view.object_count());
+  for (const auto& o : j["objects"]) std::printf("  %s\n", o.get<std::string>().c_str());
+  std::printf("groups         %u\n", pack.view.group_count());
+  std::printf("patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
+              "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu)\n",
+              pack.view.patch_count(), pt["base"].get<unsigned long long>(),
+              pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
+              pt["pair_correction"].get<unsigned long long>(),
+              pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
+              pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>());
+  std::printf("atlases        %u:", pack.view.atlas_count());
+  for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
+    std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);
+  }
+  std::printf("\nmeshes         %u\nsection bytes ", pack.view.mesh_count());
+  for (const auto& [k, v] : j["section_bytes"].items()) {
+    std::printf(" %s %llu", k.c_str(), v.get<unsigned long long>());
+  }
+  std::printf("\npatch record   %zu bytes\n", sizeof(pack::PatchRecord));
+  std::printf("atlas bytes    %llu vs conventional RGB8 light map %llu: ratio %.3f\n",
+              j["atlas_bytes"].get<unsigned long long>(),
+              j["conventional_lightmap_bytes"].get<unsigned long long>(),
+              j["atlas_to_lightmap_ratio"].get<double>());
+  return 0;
+}
+
+int verb_verify(Args& args) {
+  const std::string path = args.positional("PACK");
+  args.finish();
+  platform::FileMapping mapping;
+  char message[256] = {};
+  if (!mapping.open(path.c_str(), message, sizeof(message))) {
+    std::fprintf(stderr, "lightpatch verify: %s\n", message);
+    return 1;
+  }
+  PackView view;
+  Error error;
+  if (PackView::open(mapping.data(), mapping.size(), &view, &error) != Status::kOk) {
+    std::fprintf(stderr, "%s: INVALID: %s: %s\n", path.c_str(), status_name(error.status), error.message);
+    return 1;
+  }
+  std::printf("%s: OK (%llu bytes, %u lights, %u objects, %u patches, %u atlases)\n", path.c_str(),
+              static_cast<unsigned long long>(mapping.size()), view.light_count(), view.object_count(),
+              view.patch_count(), view.atlas_count());
+  return 0;
+}
+
+int verb_recompose(Args& args) {
+  std::string state_path, states_path, backend, output;
+  args.option("--state", &state_path);
+  args.option("--states", &states_path);
+  if (!args.option("--backend", &backend)) backend = "cpu";
+  args.option("-o", &output);
+  const std::string path = args.positional("PACK");
+  args.finish();
+  if (output.empty()) throw ArgsError("-o MAP.pfm is required");
+  if (!state_path.empty() && !states_path.empty()) throw ArgsError("give --state or --states, not both");
+  if (backend != "cpu" && backend != "gles") throw ArgsError("--backend takes cpu or gles, got '" + backend + "'");
+
+  std::vector<cooker::StateSpec> states;
+  if (!state_path.empty()) states.push_back(cooker::load_state_file(state_path));
+  if (!states_path.empty()) states = cooker::load_states_jsonl(states_path);
+  OpenPack pack(path);
+  const PackView& view = pack.view;
+
+  cooker::FloatImage map(int(view.lightmap_width()), int(view.lightmap_height()), 3);
+  if (backend == "gles") {
+    std::vector<float> rgb;
+    recompose_gles(view, states, &rgb);
+    if (rgb.size() != map.data.size()) throw CookError("GLES backend returned a map of the wrong size");
+    map.data = std::move(rgb);
+  } else {
+    Error error;
+    SceneState state;
+    CpuRecomposer recomposer;
+    if (state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
+      throw CookError(std::string("recompose: ") + error.message);
+    }
+    // Every state is relative to the authored one (DESIGN.md, Scene state); the first full build
+    // is of the authored state, then each state goes through the incremental path.
+    recomposer.rebuild(state);
+    for (const cooker::StateSpec& spec : states) {
+      state.reset_to_authored(view);
+      apply_state(spec, view, &state);
+      if (recomposer.apply(state) != Status::kOk) throw CookError("recompose: state does not match the pack");
+    }
+    std::copy(recomposer.rgb(), recomposer.rgb() + map.data.size(), map.data.begin());
+  }
+  for (float v : map.data) {
+    if (!std::isfinite(v)) throw CookError("recompose: the light map has a non-finite texel");
+  }
+  cooker::write_pfm(output, map);
+  return 0;
+}
+
+}  // namespace lightpatch::tool

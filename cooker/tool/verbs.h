@@ -1,0 +1,16 @@
+// The `lightpatch` tool's verbs. Each takes the arguments after the verb name, prints a clear
+// error and returns non-zero on bad input, and never leaves a partial output file behind.
+#pragma once
+
+namespace lightpatch::tool {
+
+struct Args;
+
+int verb_cook(Args& args);        // cook_verbs.cpp
+int verb_bake_state(Args& args);  // cook_verbs.cpp
+int verb_info(Args& args);        // pack_verbs.cpp
+int verb_verify(Args& args);      // pack_verbs.cpp
+int verb_recompose(Args& args);   // pack_verbs.cpp
+int verb_bench(Args& args);       // bench_verb.cpp
+
+}  // namespace lightpatch::tool

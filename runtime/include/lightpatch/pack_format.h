@@ -1,0 +1,216 @@
+// lightpatch pack format, version 1: the one definition shared by the cooker's writer and the
+// runtime's reader.
+//
+// A pack is one little-endian file, usable straight from a read-only memory mapping:
+//
+//   Header (64 bytes) | SectionEntry[section_count] | sections...
+//
+// Every section starts at a multiple of kSectionAlignment from the start of the file; atlas pixel
+// data is therefore aligned for glTexImage2D/glTexSubImage2D with GL_UNPACK_ALIGNMENT 4. All
+// offsets are byte offsets from the start of the file; there are no pointers. Records are fixed
+// size, with sizes and field offsets pinned by static_assert below. Reserved fields are zero.
+//
+// Sections (each at most once; "required" ones must be present):
+//   kLights      (required) LightRecord[light_count]
+//   kObjects     (required) ObjectRecord[object_count]        semi-dynamic objects
+//   kGroups      (required) GroupRecord[group_count]          contiguous patch ranges per owner
+//   kPatches     (required) PatchRecord[patch_count]          sorted by group
+//   kAtlases     (required) AtlasRecord[atlas_count]
+//   kAtlasData   (required) RGBA8 pixels of every atlas, each atlas aligned to kSectionAlignment
+//   kStrings     (required) UTF-8 names, not NUL-terminated, referenced by offset/length
+//   kMeshes      (optional) MeshRecord[mesh_count]            light-map UVs of the baked meshes
+//   kMeshData    (optional) MeshVertex[] and uint32 indices referenced by MeshRecord
+//
+// Table checksum: CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320) over the bytes of the section
+// index and of every section except kAtlasData and kMeshData, in index order, with the header's
+// table_checksum field itself excluded (the header is not covered).
+//
+// Decoding a patch texel: byte q in [0,255] of the patch's channel(s):
+//   x = q / 255
+//   v = scale * x           (kEncodingLinear)
+//   v = scale * x * x       (kEncodingSquare: sqrt-encoded darks keep precision)
+//   value = kFlagNegative ? -v : v
+// Values are irradiance in the lights' units (W/m^2-like "lux" for intensity 1 of the owning
+// light for contribution/shadow/correction patches; absolute for base patches).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace lightpatch::pack {
+
+constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 'L','P','K','1'
+constexpr uint32_t kVersion = 1;
+constexpr uint32_t kSectionAlignment = 256;
+constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
+constexpr uint32_t kMaxAtlasSize = 16384;
+constexpr uint32_t kMaxLightmapSize = 16384;
+
+enum SectionType : uint32_t {
+  kSectionLights = 1,
+  kSectionObjects = 2,
+  kSectionGroups = 3,
+  kSectionPatches = 4,
+  kSectionAtlases = 5,
+  kSectionAtlasData = 6,
+  kSectionStrings = 7,
+  kSectionMeshes = 8,
+  kSectionMeshData = 9,
+};
+constexpr uint32_t kSectionTypeMax = 9;
+
+struct Header {
+  uint32_t magic;            // kMagic
+  uint32_t version;          // kVersion
+  uint64_t file_size;        // total bytes; must equal the mapped size
+  uint32_t section_count;    // entries in the section index that follows the header
+  uint32_t table_checksum;   // CRC-32, see above
+  uint32_t lightmap_width;   // texels of the recomposed light map
+  uint32_t lightmap_height;  // texels
+  uint32_t light_count;
+  uint32_t object_count;
+  uint32_t group_count;
+  uint32_t patch_count;
+  uint32_t atlas_count;
+  uint32_t mesh_count;
+  uint32_t flags;  // reserved, 0
+  uint32_t reserved0;
+};
+static_assert(sizeof(Header) == 64);
+static_assert(offsetof(Header, file_size) == 8);
+static_assert(offsetof(Header, section_count) == 16);
+static_assert(offsetof(Header, table_checksum) == 20);
+static_assert(offsetof(Header, lightmap_width) == 24);
+static_assert(offsetof(Header, light_count) == 32);
+static_assert(offsetof(Header, patch_count) == 44);
+static_assert(offsetof(Header, mesh_count) == 52);
+
+struct SectionEntry {
+  uint32_t type;      // SectionType
+  uint32_t reserved;  // 0
+  uint64_t offset;    // from file start, multiple of kSectionAlignment
+  uint64_t length;    // bytes; a multiple of the record size for record sections
+};
+static_assert(sizeof(SectionEntry) == 24);
+static_assert(offsetof(SectionEntry, offset) == 8);
+static_assert(offsetof(SectionEntry, length) == 16);
+
+enum LightType : uint32_t { kLightPoint = 0, kLightSpot = 1, kLightDirectional = 2 };
+
+// A semi-dynamic light. Its contribution patches were baked for colour (1,1,1) and intensity 1
+// (candela for point/spot, lux for directional).
+struct LightRecord {
+  uint32_t name_offset;  // into kStrings
+  uint32_t name_length;  // bytes, > 0
+  float color[3];        // authored linear RGB, finite, >= 0
+  float intensity;       // authored intensity, finite, >= 0
+  uint32_t type;         // LightType
+  uint32_t reserved;     // 0
+};
+static_assert(sizeof(LightRecord) == 32);
+static_assert(offsetof(LightRecord, color) == 8);
+static_assert(offsetof(LightRecord, intensity) == 20);
+static_assert(offsetof(LightRecord, type) == 24);
+
+// A semi-dynamic object (a glTF mesh node marked semiDynamic).
+struct ObjectRecord {
+  uint32_t name_offset;  // into kStrings
+  uint32_t name_length;  // bytes, > 0
+  uint32_t reserved[2];  // 0
+};
+static_assert(sizeof(ObjectRecord) == 16);
+
+enum GroupKind : uint16_t {
+  kGroupBase = 0,          // light = object_a = object_b = kNone16; added once
+  kGroupContribution = 1,  // light; added with factor f_l = on * color * intensity
+  kGroupShadow = 2,        // light, object_a; subtracted with f_l while object_a is visible
+  kGroupPairCorrection = 3,  // light, object_a < object_b; added with f_l while both visible
+  // What object_a changes in the static lights' light (B with the object present minus B): its
+  // shadow and blocked bounce, the bounce it adds. light = object_b = kNone16; subtracted with
+  // factor 1 while object_a is visible (paper §3.2.1: objects cast shadows under static light).
+  kGroupStaticShadow = 4,
+};
+constexpr uint16_t kGroupKindMax = kGroupStaticShadow;
+
+// Groups whose decoded values are subtracted from the map.
+constexpr bool group_subtracts(uint16_t kind) {
+  return kind == kGroupShadow || kind == kGroupStaticShadow;
+}
+
+// A contiguous range of patches with one owner. Groups are sorted by (kind, light, object_a,
+// object_b); at most one group per owner; every patch belongs to exactly one group.
+struct GroupRecord {
+  uint16_t kind;         // GroupKind
+  uint16_t light;        // light index or kNone16
+  uint16_t object_a;     // object index or kNone16
+  uint16_t object_b;     // object index or kNone16
+  uint32_t first_patch;  // index into kPatches
+  uint32_t patch_count;  // >= 1
+};
+static_assert(sizeof(GroupRecord) == 16);
+static_assert(offsetof(GroupRecord, first_patch) == 8);
+
+enum PatchEncoding : uint8_t { kEncodingLinear = 0, kEncodingSquare = 1 };
+enum PatchFlags : uint8_t {
+  kFlagNegative = 1u << 0,  // decoded values are subtracted from (added with sign -1 to) the map
+};
+
+// One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of the light map.
+// Rectangles are in texels with the origin at the top-left of the image (row 0 is the first
+// row of the atlas data, and glTF v = 0 in the light map).
+struct PatchRecord {
+  uint16_t atlas_x, atlas_y;  // top-left texel in the atlas
+  uint16_t width, height;     // texels, >= 1
+  uint16_t dest_x, dest_y;    // top-left texel in the light map
+  uint8_t atlas;              // atlas index
+  uint8_t channel;            // first atlas channel (0=R .. 3=A)
+  uint8_t channel_count;      // 1 (grey: same value in R,G,B of the map) or 3 (RGB from channel..+2)
+  uint8_t encoding;           // PatchEncoding
+  float scale;                // finite, > 0
+  uint8_t flags;              // PatchFlags
+  uint8_t reserved;           // 0
+  uint16_t group;             // index of the owning GroupRecord (redundant, validated)
+};
+static_assert(sizeof(PatchRecord) == 24);
+static_assert(offsetof(PatchRecord, dest_x) == 8);
+static_assert(offsetof(PatchRecord, atlas) == 12);
+static_assert(offsetof(PatchRecord, scale) == 16);
+static_assert(offsetof(PatchRecord, flags) == 20);
+static_assert(offsetof(PatchRecord, group) == 22);
+
+struct AtlasRecord {
+  uint32_t width;        // texels, power of two, <= kMaxAtlasSize
+  uint32_t height;       // texels, power of two, <= kMaxAtlasSize
+  uint64_t data_offset;  // from file start, inside kAtlasData, multiple of kSectionAlignment
+                         // width*height*4 bytes of RGBA8, rows top to bottom, tightly packed
+};
+static_assert(sizeof(AtlasRecord) == 16);
+
+// Light-map UVs of one baked glTF mesh primitive instance, so a game can draw the scene with the
+// layout the cooker chose (unwrapped or verbatim TEXCOORD_1). Vertices refer to the source
+// primitive's vertices; seams duplicate them.
+struct MeshRecord {
+  uint32_t name_offset;     // glTF node name, into kStrings
+  uint32_t name_length;     // bytes
+  uint32_t node_index;      // glTF node index
+  uint32_t primitive;       // primitive index within the node's mesh
+  uint64_t vertex_offset;   // from file start, inside kMeshData: MeshVertex[vertex_count]
+  uint64_t index_offset;    // from file start, inside kMeshData: uint32_t[index_count]
+  uint32_t vertex_count;
+  uint32_t index_count;     // multiple of 3; every index < vertex_count
+  uint16_t object;          // semi-dynamic object index or kNone16
+  uint16_t reserved0;
+  uint32_t reserved1;
+};
+static_assert(sizeof(MeshRecord) == 48);
+static_assert(offsetof(MeshRecord, vertex_offset) == 16);
+static_assert(offsetof(MeshRecord, vertex_count) == 32);
+static_assert(offsetof(MeshRecord, object) == 40);
+
+struct MeshVertex {
+  uint32_t source_vertex;  // index into the source primitive's vertex attributes
+  float u, v;              // light-map UV in [0,1], glTF convention (v = 0 at the top row)
+};
+static_assert(sizeof(MeshVertex) == 12);
+
+}  // namespace lightpatch::pack

@@ -1,0 +1,92 @@
+// Read-only, validated view of a pack held in memory (usually a file mapping).
+//
+// PackView::open validates everything once (header, section index, every record, every rectangle,
+// every index, the table checksum) with 64-bit overflow-safe bounds checks; after a successful
+// open every accessor is safe to call with indices below the matching count. The view never
+// copies or owns the bytes: the caller keeps the memory alive and unchanged while the view is used.
+// No exceptions, no allocation.
+#pragma once
+
+#include <cstdint>
+
+#include "lightpatch/pack_format.h"
+#include "lightpatch/status.h"
+
+namespace lightpatch {
+
+// A name inside the pack's string section; not NUL-terminated.
+struct Name {
+  const char* data;
+  uint32_t length;
+  bool equals(const char* s, uint32_t n) const;
+};
+
+class PackView {
+ public:
+  PackView() = default;
+
+  // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give) and on
+  // success fills *out. On failure returns the error and fills *error (if non-null) with a
+  // message naming the problem; *out is left empty.
+  static Status open(const void* data, uint64_t size, PackView* out, Error* error);
+
+  bool valid() const { return header_ != nullptr; }
+  const pack::Header& header() const { return *header_; }
+  uint32_t lightmap_width() const { return header_->lightmap_width; }
+  uint32_t lightmap_height() const { return header_->lightmap_height; }
+
+  uint32_t light_count() const { return header_->light_count; }
+  uint32_t object_count() const { return header_->object_count; }
+  uint32_t group_count() const { return header_->group_count; }
+  uint32_t patch_count() const { return header_->patch_count; }
+  uint32_t atlas_count() const { return header_->atlas_count; }
+  uint32_t mesh_count() const { return header_->mesh_count; }
+
+  const pack::LightRecord& light(uint32_t i) const { return lights_[i]; }
+  const pack::ObjectRecord& object(uint32_t i) const { return objects_[i]; }
+  const pack::GroupRecord& group(uint32_t i) const { return groups_[i]; }
+  const pack::PatchRecord& patch(uint32_t i) const { return patches_[i]; }
+  const pack::AtlasRecord& atlas(uint32_t i) const { return atlases_[i]; }
+  const pack::MeshRecord& mesh(uint32_t i) const { return meshes_[i]; }
+  const pack::GroupRecord* groups() const { return groups_; }
+  const pack::PatchRecord* patches() const { return patches_; }
+
+  Name light_name(uint32_t i) const;
+  Name object_name(uint32_t i) const;
+  Name mesh_name(uint32_t i) const;
+
+  // RGBA8 rows, top to bottom, width*height*4 bytes.
+  const uint8_t* atlas_pixels(uint32_t i) const;
+  const pack::MeshVertex* mesh_vertices(uint32_t i) const;
+  const uint32_t* mesh_indices(uint32_t i) const;
+
+  // Index of the light/object with this name, or -1.
+  int32_t find_light(const char* name, uint32_t length) const;
+  int32_t find_object(const char* name, uint32_t length) const;
+
+  // Group lookups; -1 when the pack holds no such group (nothing to draw).
+  int32_t base_group() const;
+  int32_t contribution_group(uint32_t light) const;
+  int32_t shadow_group(uint32_t light, uint32_t object) const;
+
+  const uint8_t* bytes() const { return bytes_; }
+  uint64_t size() const { return size_; }
+
+ private:
+  const uint8_t* bytes_ = nullptr;
+  uint64_t size_ = 0;
+  const pack::Header* header_ = nullptr;
+  const pack::LightRecord* lights_ = nullptr;
+  const pack::ObjectRecord* objects_ = nullptr;
+  const pack::GroupRecord* groups_ = nullptr;
+  const pack::PatchRecord* patches_ = nullptr;
+  const pack::AtlasRecord* atlases_ = nullptr;
+  const pack::MeshRecord* meshes_ = nullptr;
+  const char* strings_ = nullptr;
+  uint64_t strings_length_ = 0;
+};
+
+// CRC-32 (IEEE, reflected), the pack's table checksum. `crc` chains calls; start with 0.
+uint32_t crc32(const void* data, uint64_t size, uint32_t crc = 0);
+
+}  // namespace lightpatch

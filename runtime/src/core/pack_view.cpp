@@ -1,0 +1,517 @@
+// PackView::open: validation of a whole pack before anything is used (pack_format.h). Every
+// offset and length is checked in 64-bit arithmetic written so that no sum can overflow.
+#include "lightpatch/pack_view.h"
+
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+
+namespace lightpatch {
+
+using namespace pack;
+
+bool Name::equals(const char* s, uint32_t n) const {
+  return n == length && (n == 0 || std::memcmp(data, s, n) == 0);
+}
+
+namespace {
+
+struct Section {
+  bool present = false;
+  uint64_t offset = 0;
+  uint64_t length = 0;
+};
+
+const char* section_name(uint32_t type) {
+  switch (type) {
+    case kSectionLights: return "lights";
+    case kSectionObjects: return "objects";
+    case kSectionGroups: return "groups";
+    case kSectionPatches: return "patches";
+    case kSectionAtlases: return "atlases";
+    case kSectionAtlasData: return "atlas data";
+    case kSectionStrings: return "strings";
+    case kSectionMeshes: return "meshes";
+    case kSectionMeshData: return "mesh data";
+  }
+  return "unknown";
+}
+
+const char* group_kind_name(uint32_t kind) {
+  switch (kind) {
+    case kGroupBase: return "base";
+    case kGroupContribution: return "contribution";
+    case kGroupShadow: return "shadow";
+    case kGroupPairCorrection: return "pair correction";
+    case kGroupStaticShadow: return "static shadow";
+  }
+  return "unknown";
+}
+
+// [offset, offset + length) lies inside [begin, begin + size), without overflow.
+bool range_inside(uint64_t offset, uint64_t length, uint64_t begin, uint64_t size) {
+  if (offset < begin) return false;
+  const uint64_t rel = offset - begin;
+  return rel <= size && length <= size - rel;
+}
+
+bool is_pow2(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+bool finite_non_negative(float v) { return std::isfinite(v) && v >= 0.0f; }
+
+// Lexicographic key of a group for the sort/uniqueness check.
+uint64_t group_key(const GroupRecord& g) {
+  return (uint64_t(g.kind) << 48) | (uint64_t(g.light) << 32) | (uint64_t(g.object_a) << 16) |
+         uint64_t(g.object_b);
+}
+
+// What a successful validation hands to PackView::open.
+struct Parsed {
+  const Header* header = nullptr;
+  const LightRecord* lights = nullptr;
+  const ObjectRecord* objects = nullptr;
+  const GroupRecord* groups = nullptr;
+  const PatchRecord* patches = nullptr;
+  const AtlasRecord* atlases = nullptr;
+  const MeshRecord* meshes = nullptr;
+  const char* strings = nullptr;
+  uint64_t strings_length = 0;
+};
+
+class Validator {
+ public:
+  Validator(const uint8_t* bytes, uint64_t size, Error* error)
+      : b_(bytes), size_(size), error_(error) {}
+
+  Status run(Parsed* out);
+
+ private:
+  Status fail(Status s, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
+  Status check_name(const char* what, uint32_t index, uint32_t offset, uint32_t length,
+                    bool allow_empty);
+  template <typename T>
+  const T* at(uint64_t offset) const {
+    return reinterpret_cast<const T*>(b_ + offset);
+  }
+
+  const uint8_t* b_;
+  uint64_t size_;
+  Error* error_;
+  Section sections_[kSectionTypeMax + 1];
+};
+
+Status Validator::fail(Status s, const char* fmt, ...) {
+  if (error_ != nullptr) {
+    error_->status = s;
+    va_list args;
+    va_start(args, fmt);
+    std::vsnprintf(error_->message, sizeof(error_->message), fmt, args);
+    va_end(args);
+  }
+  return s;
+}
+
+Status Validator::check_name(const char* what, uint32_t index, uint32_t offset, uint32_t length,
+                             bool allow_empty) {
+  if (length == 0 && !allow_empty) {
+    return fail(Status::kCorrupt, "%s %u: empty name", what, index);
+  }
+  if (!range_inside(offset, length, 0, sections_[kSectionStrings].length)) {
+    return fail(Status::kCorrupt, "%s %u: name %u+%u exceeds the string section (%llu bytes)", what,
+                index, offset, length,
+                static_cast<unsigned long long>(sections_[kSectionStrings].length));
+  }
+  return Status::kOk;
+}
+
+Status Validator::run(Parsed* out) {
+  if (b_ == nullptr && size_ > 0) return fail(Status::kInvalidArgument, "null pack data");
+  if (reinterpret_cast<uintptr_t>(b_) % 8 != 0) {
+    return fail(Status::kInvalidArgument, "pack data is not 8-byte aligned");
+  }
+  if (size_ < sizeof(Header)) {
+    return fail(Status::kTruncated, "file of %llu bytes is shorter than the 64-byte header",
+                static_cast<unsigned long long>(size_));
+  }
+  const Header& h = *at<Header>(0);
+  if (h.magic != kMagic) return fail(Status::kBadMagic, "bad magic: not a lightpatch pack");
+  if (h.version != kVersion) {
+    return fail(Status::kUnsupportedVersion, "format version %u is not supported (this reader: %u)",
+                h.version, kVersion);
+  }
+  if (h.file_size != size_) {
+    return fail(h.file_size > size_ ? Status::kTruncated : Status::kCorrupt,
+                "header says %llu bytes but the file has %llu",
+                static_cast<unsigned long long>(h.file_size),
+                static_cast<unsigned long long>(size_));
+  }
+  if (h.flags != 0 || h.reserved0 != 0) return fail(Status::kCorrupt, "header: reserved fields not zero");
+  if (h.lightmap_width == 0 || h.lightmap_height == 0 || h.lightmap_width > kMaxLightmapSize ||
+      h.lightmap_height > kMaxLightmapSize) {
+    return fail(Status::kCorrupt, "light-map size %ux%u out of range 1..%u", h.lightmap_width,
+                h.lightmap_height, kMaxLightmapSize);
+  }
+  // Owner indices are 16-bit with 0xFFFF meaning none; the patch's group index is 16-bit; the
+  // patch's atlas index is 8-bit.
+  if (h.light_count >= kNone16) return fail(Status::kCorrupt, "too many lights (%u)", h.light_count);
+  if (h.object_count >= kNone16) {
+    return fail(Status::kCorrupt, "too many objects (%u)", h.object_count);
+  }
+  if (h.group_count > 0x10000u) return fail(Status::kCorrupt, "too many groups (%u)", h.group_count);
+  if (h.atlas_count > 256u) return fail(Status::kCorrupt, "too many atlases (%u)", h.atlas_count);
+  if (h.section_count == 0 || h.section_count > kSectionTypeMax) {
+    return fail(Status::kCorrupt, "section count %u out of range 1..%u", h.section_count,
+                kSectionTypeMax);
+  }
+  const uint64_t index_end = sizeof(Header) + uint64_t(h.section_count) * sizeof(SectionEntry);
+  if (index_end > size_) return fail(Status::kTruncated, "section index ends past the end of the file");
+
+  // Section index.
+  const SectionEntry* entries = at<SectionEntry>(sizeof(Header));
+  for (uint32_t i = 0; i < h.section_count; ++i) {
+    const SectionEntry& e = entries[i];
+    if (e.type == 0 || e.type > kSectionTypeMax) {
+      return fail(Status::kCorrupt, "section %u: unknown type %u", i, e.type);
+    }
+    if (e.reserved != 0) return fail(Status::kCorrupt, "section %u: reserved field not zero", i);
+    Section& s = sections_[e.type];
+    if (s.present) return fail(Status::kCorrupt, "section %u: second %s section", i, section_name(e.type));
+    if (e.offset % kSectionAlignment != 0) {
+      return fail(Status::kCorrupt, "%s section: offset %llu not a multiple of %u",
+                  section_name(e.type), static_cast<unsigned long long>(e.offset), kSectionAlignment);
+    }
+    if (!range_inside(e.offset, e.length, index_end, size_ - index_end)) {
+      return fail(e.offset < index_end ? Status::kCorrupt : Status::kTruncated,
+                  "%s section: bytes %llu+%llu outside the file's %llu bytes after the index",
+                  section_name(e.type), static_cast<unsigned long long>(e.offset),
+                  static_cast<unsigned long long>(e.length), static_cast<unsigned long long>(size_));
+    }
+    s.present = true;
+    s.offset = e.offset;
+    s.length = e.length;
+  }
+  for (uint32_t i = 0; i < h.section_count; ++i) {
+    for (uint32_t j = i + 1; j < h.section_count; ++j) {
+      const SectionEntry& a = entries[i];
+      const SectionEntry& c = entries[j];
+      if (a.length == 0 || c.length == 0) continue;
+      // Both ranges are inside the file, so these sums cannot overflow.
+      if (a.offset < c.offset + c.length && c.offset < a.offset + a.length) {
+        return fail(Status::kCorrupt, "%s and %s sections overlap", section_name(a.type),
+                    section_name(c.type));
+      }
+    }
+  }
+  const uint32_t required[] = {kSectionLights,  kSectionObjects,   kSectionGroups, kSectionPatches,
+                               kSectionAtlases, kSectionAtlasData, kSectionStrings};
+  for (uint32_t t : required) {
+    if (!sections_[t].present) return fail(Status::kCorrupt, "required %s section missing", section_name(t));
+  }
+  if (h.mesh_count > 0 && (!sections_[kSectionMeshes].present || !sections_[kSectionMeshData].present)) {
+    return fail(Status::kCorrupt, "%u meshes but no mesh or mesh-data section", h.mesh_count);
+  }
+  struct Counted {
+    uint32_t type;
+    uint64_t record;
+    uint32_t count;
+  };
+  const Counted counted[] = {{kSectionLights, sizeof(LightRecord), h.light_count},
+                             {kSectionObjects, sizeof(ObjectRecord), h.object_count},
+                             {kSectionGroups, sizeof(GroupRecord), h.group_count},
+                             {kSectionPatches, sizeof(PatchRecord), h.patch_count},
+                             {kSectionAtlases, sizeof(AtlasRecord), h.atlas_count},
+                             {kSectionMeshes, sizeof(MeshRecord), h.mesh_count}};
+  for (const Counted& c : counted) {
+    const Section& s = sections_[c.type];
+    if (!s.present) continue;  // only kMeshes is optional, checked above
+    if (s.length % c.record != 0 || s.length / c.record != c.count) {
+      return fail(Status::kCorrupt, "%s section: %llu bytes, expected %u records of %llu bytes",
+                  section_name(c.type), static_cast<unsigned long long>(s.length), c.count,
+                  static_cast<unsigned long long>(c.record));
+    }
+  }
+
+  // Checksum before the records are interpreted (a flipped byte is reported as such).
+  uint32_t crc = crc32(entries, uint64_t(h.section_count) * sizeof(SectionEntry));
+  for (uint32_t i = 0; i < h.section_count; ++i) {
+    const SectionEntry& e = entries[i];
+    if (e.type == kSectionAtlasData || e.type == kSectionMeshData) continue;
+    crc = crc32(b_ + e.offset, e.length, crc);
+  }
+  if (crc != h.table_checksum) {
+    return fail(Status::kChecksumMismatch, "table checksum %08x does not match the stored %08x", crc,
+                h.table_checksum);
+  }
+
+  const LightRecord* lights = at<LightRecord>(sections_[kSectionLights].offset);
+  const ObjectRecord* objects = at<ObjectRecord>(sections_[kSectionObjects].offset);
+  const GroupRecord* groups = at<GroupRecord>(sections_[kSectionGroups].offset);
+  const PatchRecord* patches = at<PatchRecord>(sections_[kSectionPatches].offset);
+  const AtlasRecord* atlases = at<AtlasRecord>(sections_[kSectionAtlases].offset);
+  const MeshRecord* meshes =
+      sections_[kSectionMeshes].present ? at<MeshRecord>(sections_[kSectionMeshes].offset) : nullptr;
+
+  for (uint32_t i = 0; i < h.light_count; ++i) {
+    const LightRecord& l = lights[i];
+    if (Status s = check_name("light", i, l.name_offset, l.name_length, false); s != Status::kOk) return s;
+    for (int c = 0; c < 3; ++c) {
+      if (!finite_non_negative(l.color[c])) {
+        return fail(Status::kCorrupt, "light %u: colour component %d is not finite and >= 0", i, c);
+      }
+    }
+    if (!finite_non_negative(l.intensity)) {
+      return fail(Status::kCorrupt, "light %u: intensity is not finite and >= 0", i);
+    }
+    if (l.type > kLightDirectional) return fail(Status::kCorrupt, "light %u: unknown type %u", i, l.type);
+    if (l.reserved != 0) return fail(Status::kCorrupt, "light %u: reserved field not zero", i);
+  }
+  for (uint32_t i = 0; i < h.object_count; ++i) {
+    const ObjectRecord& o = objects[i];
+    if (Status s = check_name("object", i, o.name_offset, o.name_length, false); s != Status::kOk) return s;
+    if (o.reserved[0] != 0 || o.reserved[1] != 0) {
+      return fail(Status::kCorrupt, "object %u: reserved field not zero", i);
+    }
+  }
+
+  const Section& atlas_data = sections_[kSectionAtlasData];
+  for (uint32_t i = 0; i < h.atlas_count; ++i) {
+    const AtlasRecord& a = atlases[i];
+    if (!is_pow2(a.width) || !is_pow2(a.height) || a.width > kMaxAtlasSize || a.height > kMaxAtlasSize) {
+      return fail(Status::kCorrupt, "atlas %u: size %ux%u is not a power of two up to %u", i, a.width,
+                  a.height, kMaxAtlasSize);
+    }
+    if (a.data_offset % kSectionAlignment != 0) {
+      return fail(Status::kCorrupt, "atlas %u: data offset %llu not a multiple of %u", i,
+                  static_cast<unsigned long long>(a.data_offset), kSectionAlignment);
+    }
+    const uint64_t bytes = uint64_t(a.width) * a.height * 4;
+    if (!range_inside(a.data_offset, bytes, atlas_data.offset, atlas_data.length)) {
+      return fail(Status::kCorrupt, "atlas %u: pixels %llu+%llu outside the atlas-data section", i,
+                  static_cast<unsigned long long>(a.data_offset), static_cast<unsigned long long>(bytes));
+    }
+  }
+
+  uint32_t expected_first = 0;
+  for (uint32_t i = 0; i < h.group_count; ++i) {
+    const GroupRecord& g = groups[i];
+    const bool light_ok = g.light < h.light_count;
+    const bool a_ok = g.object_a < h.object_count;
+    const bool b_ok = g.object_b < h.object_count;
+    bool ok = false;
+    switch (g.kind) {
+      case kGroupBase:
+        ok = g.light == kNone16 && g.object_a == kNone16 && g.object_b == kNone16;
+        break;
+      case kGroupContribution:
+        ok = light_ok && g.object_a == kNone16 && g.object_b == kNone16;
+        break;
+      case kGroupShadow:
+        ok = light_ok && a_ok && g.object_b == kNone16;
+        break;
+      case kGroupPairCorrection:
+        ok = light_ok && a_ok && b_ok && g.object_a < g.object_b;
+        break;
+      case kGroupStaticShadow:
+        ok = g.light == kNone16 && a_ok && g.object_b == kNone16;
+        break;
+      default:
+        return fail(Status::kCorrupt, "group %u: unknown kind %u", i, g.kind);
+    }
+    if (!ok) {
+      return fail(Status::kCorrupt, "group %u (%s): owner light %u objects %u,%u invalid", i,
+                  group_kind_name(g.kind), g.light, g.object_a, g.object_b);
+    }
+    if (i > 0 && group_key(groups[i - 1]) >= group_key(g)) {
+      return fail(Status::kCorrupt, "group %u: not sorted after group %u (or a duplicate owner)", i, i - 1);
+    }
+    if (g.patch_count == 0) return fail(Status::kCorrupt, "group %u: no patches", i);
+    if (g.first_patch != expected_first) {
+      return fail(Status::kCorrupt, "group %u: first patch %u, expected %u (groups must be contiguous)",
+                  i, g.first_patch, expected_first);
+    }
+    if (!range_inside(g.first_patch, g.patch_count, 0, h.patch_count)) {
+      return fail(Status::kCorrupt, "group %u: patches %u+%u exceed the %u patches", i, g.first_patch,
+                  g.patch_count, h.patch_count);
+    }
+    expected_first = g.first_patch + g.patch_count;
+  }
+  if (expected_first != h.patch_count) {
+    return fail(Status::kCorrupt, "groups cover %u of %u patches", expected_first, h.patch_count);
+  }
+
+  for (uint32_t i = 0; i < h.patch_count; ++i) {
+    const PatchRecord& p = patches[i];
+    if (p.group >= h.group_count) return fail(Status::kCorrupt, "patch %u: group %u out of range", i, p.group);
+    const GroupRecord& g = groups[p.group];
+    if (i < g.first_patch || i - g.first_patch >= g.patch_count) {
+      return fail(Status::kCorrupt, "patch %u: outside the range of its group %u", i, p.group);
+    }
+    if (p.atlas >= h.atlas_count) return fail(Status::kCorrupt, "patch %u: atlas %u out of range", i, p.atlas);
+    if (p.width == 0 || p.height == 0) return fail(Status::kCorrupt, "patch %u: empty rectangle", i);
+    const AtlasRecord& a = atlases[p.atlas];
+    if (uint32_t(p.atlas_x) + p.width > a.width || uint32_t(p.atlas_y) + p.height > a.height) {
+      return fail(Status::kCorrupt, "patch %u: atlas rectangle %u+%u x %u+%u exceeds atlas %u (%ux%u)", i,
+                  p.atlas_x, p.width, p.atlas_y, p.height, p.atlas, a.width, a.height);
+    }
+    if (uint32_t(p.dest_x) + p.width > h.lightmap_width) {
+      return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds light-map width %u", i,
+                  p.dest_x, p.width, h.lightmap_width);
+    }
+    if (uint32_t(p.dest_y) + p.height > h.lightmap_height) {
+      return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds light-map height %u",
+                  i, p.dest_y, p.height, h.lightmap_height);
+    }
+    if (p.channel_count != 1 && p.channel_count != 3) {
+      return fail(Status::kCorrupt, "patch %u: channel count %u (must be 1 or 3)", i, p.channel_count);
+    }
+    if (uint32_t(p.channel) + p.channel_count > 4) {
+      return fail(Status::kCorrupt, "patch %u: channels %u+%u exceed RGBA", i, p.channel, p.channel_count);
+    }
+    if (p.encoding != kEncodingLinear && p.encoding != kEncodingSquare) {
+      return fail(Status::kCorrupt, "patch %u: unknown encoding %u", i, p.encoding);
+    }
+    if (!std::isfinite(p.scale) || !(p.scale > 0.0f)) {
+      return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
+    }
+    if ((p.flags & ~uint32_t(kFlagNegative)) != 0 || p.reserved != 0) {
+      return fail(Status::kCorrupt, "patch %u: unknown flags %02x or reserved byte not zero", i, p.flags);
+    }
+  }
+
+  if (h.mesh_count > 0) {
+    const Section& md = sections_[kSectionMeshData];
+    for (uint32_t i = 0; i < h.mesh_count; ++i) {
+      const MeshRecord& m = meshes[i];
+      if (Status s = check_name("mesh", i, m.name_offset, m.name_length, true); s != Status::kOk) return s;
+      if (m.object != kNone16 && m.object >= h.object_count) {
+        return fail(Status::kCorrupt, "mesh %u: object %u out of range", i, m.object);
+      }
+      if (m.reserved0 != 0 || m.reserved1 != 0) return fail(Status::kCorrupt, "mesh %u: reserved field not zero", i);
+      if (m.vertex_offset % 4 != 0 || m.index_offset % 4 != 0) {
+        return fail(Status::kCorrupt, "mesh %u: vertex or index offset not 4-byte aligned", i);
+      }
+      if (!range_inside(m.vertex_offset, uint64_t(m.vertex_count) * sizeof(MeshVertex), md.offset, md.length)) {
+        return fail(Status::kCorrupt, "mesh %u: %u vertices at %llu outside the mesh-data section", i,
+                    m.vertex_count, static_cast<unsigned long long>(m.vertex_offset));
+      }
+      if (!range_inside(m.index_offset, uint64_t(m.index_count) * 4, md.offset, md.length)) {
+        return fail(Status::kCorrupt, "mesh %u: %u indices at %llu outside the mesh-data section", i,
+                    m.index_count, static_cast<unsigned long long>(m.index_offset));
+      }
+      if (m.index_count % 3 != 0) {
+        return fail(Status::kCorrupt, "mesh %u: index count %u not a multiple of 3", i, m.index_count);
+      }
+      const MeshVertex* v = at<MeshVertex>(m.vertex_offset);
+      for (uint32_t k = 0; k < m.vertex_count; ++k) {
+        if (!std::isfinite(v[k].u) || !std::isfinite(v[k].v)) {
+          return fail(Status::kCorrupt, "mesh %u: vertex %u has a non-finite UV", i, k);
+        }
+      }
+      const uint32_t* idx = at<uint32_t>(m.index_offset);
+      for (uint32_t k = 0; k < m.index_count; ++k) {
+        if (idx[k] >= m.vertex_count) {
+          return fail(Status::kCorrupt, "mesh %u: index %u is %u, not below the vertex count %u", i, k,
+                      idx[k], m.vertex_count);
+        }
+      }
+    }
+  }
+
+  out->header = &h;
+  out->lights = lights;
+  out->objects = objects;
+  out->groups = groups;
+  out->patches = patches;
+  out->atlases = atlases;
+  out->meshes = meshes;
+  out->strings = at<char>(sections_[kSectionStrings].offset);
+  out->strings_length = sections_[kSectionStrings].length;
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status PackView::open(const void* data, uint64_t size, PackView* out, Error* error) {
+  if (out == nullptr) return set_error(error, Status::kInvalidArgument, "null output view");
+  *out = PackView();
+  Parsed p;
+  Validator v(static_cast<const uint8_t*>(data), size, error);
+  const Status s = v.run(&p);
+  if (s != Status::kOk) return s;
+  out->bytes_ = static_cast<const uint8_t*>(data);
+  out->size_ = size;
+  out->header_ = p.header;
+  out->lights_ = p.lights;
+  out->objects_ = p.objects;
+  out->groups_ = p.groups;
+  out->patches_ = p.patches;
+  out->atlases_ = p.atlases;
+  out->meshes_ = p.meshes;
+  out->strings_ = p.strings;
+  out->strings_length_ = p.strings_length;
+  if (error != nullptr) *error = Error();
+  return Status::kOk;
+}
+
+Name PackView::light_name(uint32_t i) const {
+  return Name{strings_ + lights_[i].name_offset, lights_[i].name_length};
+}
+Name PackView::object_name(uint32_t i) const {
+  return Name{strings_ + objects_[i].name_offset, objects_[i].name_length};
+}
+Name PackView::mesh_name(uint32_t i) const {
+  return Name{strings_ + meshes_[i].name_offset, meshes_[i].name_length};
+}
+
+const uint8_t* PackView::atlas_pixels(uint32_t i) const { return bytes_ + atlases_[i].data_offset; }
+const MeshVertex* PackView::mesh_vertices(uint32_t i) const {
+  return reinterpret_cast<const MeshVertex*>(bytes_ + meshes_[i].vertex_offset);
+}
+const uint32_t* PackView::mesh_indices(uint32_t i) const {
+  return reinterpret_cast<const uint32_t*>(bytes_ + meshes_[i].index_offset);
+}
+
+int32_t PackView::find_light(const char* name, uint32_t length) const {
+  for (uint32_t i = 0; i < light_count(); ++i) {
+    if (light_name(i).equals(name, length)) return static_cast<int32_t>(i);
+  }
+  return -1;
+}
+int32_t PackView::find_object(const char* name, uint32_t length) const {
+  for (uint32_t i = 0; i < object_count(); ++i) {
+    if (object_name(i).equals(name, length)) return static_cast<int32_t>(i);
+  }
+  return -1;
+}
+
+namespace {
+// Groups are sorted by key: binary search.
+int32_t find_group(const GroupRecord* groups, uint32_t count, const GroupRecord& probe) {
+  const uint64_t key = group_key(probe);
+  uint32_t lo = 0, hi = count;
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    const uint64_t k = group_key(groups[mid]);
+    if (k == key) return static_cast<int32_t>(mid);
+    if (k < key) lo = mid + 1; else hi = mid;
+  }
+  return -1;
+}
+}  // namespace
+
+int32_t PackView::base_group() const {
+  return find_group(groups_, group_count(), GroupRecord{kGroupBase, kNone16, kNone16, kNone16, 0, 0});
+}
+int32_t PackView::contribution_group(uint32_t light) const {
+  if (light >= light_count()) return -1;
+  return find_group(groups_, group_count(),
+                    GroupRecord{kGroupContribution, uint16_t(light), kNone16, kNone16, 0, 0});
+}
+int32_t PackView::shadow_group(uint32_t light, uint32_t object) const {
+  if (light >= light_count() || object >= object_count()) return -1;
+  return find_group(groups_, group_count(),
+                    GroupRecord{kGroupShadow, uint16_t(light), uint16_t(object), kNone16, 0, 0});
+}
+
+}  // namespace lightpatch

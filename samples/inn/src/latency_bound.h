@@ -1,0 +1,29 @@
+// The latency bound of a gameplay change, in frames, derived before it runs from the planner's
+// known costs and the budget rule (planner.h): the number a scripted run checks each change
+// against.
+//
+//  * Incremental: with no rebuild running, a change whose cost (texels, against the presented
+//    map) fits in one frame's budget and is below a rebuild's cost is drawn whole in the next
+//    update: latency 1. InnGame::animate() reserves the budget of pending gameplay changes before
+//    it schedules any flicker, so flicker never pushes one to a later frame.
+//  * Otherwise it waits for the running rebuild (if any) and then for at most one full rebuild
+//    (its own, or one the drift bound started while it waited), plus the frame that applies it.
+//    A rebuild of T texels takes at most 2 + ceil(T / (budget - largest patch)) frames: each
+//    frame but the clear's and the last does at least budget minus one patch of work.
+#pragma once
+
+#include <cstdint>
+
+#include "lightpatch/runtime.h"
+
+namespace lightpatch::inn {
+
+// Frames a rebuild of `texels` texels needs at most under `budget`.
+uint32_t rebuild_frames_bound(const PackView& pack, uint64_t texels, uint64_t budget);
+
+// Bound for a change of `light` (or `object`, when light < 0) made now, before the next
+// update(budget).
+uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint64_t budget, int32_t light,
+                              int32_t object);
+
+}  // namespace lightpatch::inn

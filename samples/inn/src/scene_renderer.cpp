@@ -1,0 +1,155 @@
+#include "scene_renderer.h"
+
+#include <cstddef>
+#include <cstdio>
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include "gl_program.h"
+#include "lightpatch/platform/gl.h"
+#include "world.h"
+
+namespace lightpatch::inn {
+namespace {
+
+const char* const kVertexShader = R"(#version 300 es
+uniform mat4 u_view_projection;
+uniform vec4 u_flames[32];  // glow of each light's flame, 4 lights per vec4
+in vec3 a_position;
+in vec2 a_lightmap_uv;
+in vec4 a_albedo;
+in vec3 a_emissive;
+in float a_flame;
+out vec2 v_lightmap_uv;
+out vec3 v_albedo;
+out vec3 v_emission;
+void main() {
+  gl_Position = u_view_projection * vec4(a_position, 1.0);
+  v_lightmap_uv = a_lightmap_uv;
+  v_albedo = a_albedo.rgb;
+  float glow = 1.0;
+  if (a_flame >= 0.0) {
+    int i = int(a_flame + 0.5);
+    glow = u_flames[i / 4][i % 4];
+  }
+  v_emission = a_emissive * glow;
+}
+)";
+
+const char* const kFragmentShader = R"(#version 300 es
+precision highp float;
+uniform sampler2D u_light_map;
+uniform float u_exposure;
+in vec2 v_lightmap_uv;
+in vec3 v_albedo;
+in vec3 v_emission;
+out vec4 o_color;
+void main() {
+  vec3 irradiance = max(texture(u_light_map, v_lightmap_uv).rgb, vec3(0.0));
+  vec3 radiance = v_albedo * irradiance * 0.31830988 + v_emission;
+  vec3 c = 1.0 - exp(-u_exposure * radiance);
+  // sRGB transfer curve (the framebuffer is a plain 8-bit one).
+  vec3 lo = c * 12.92;
+  vec3 hi = 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055;
+  o_color = vec4(mix(lo, hi, step(vec3(0.0031308), c)), 1.0);
+}
+)";
+
+}  // namespace
+
+SceneRenderer::~SceneRenderer() {
+  if (program_) glDeleteProgram(program_);
+  if (vao_) glDeleteVertexArrays(1, &vao_);
+  if (vbo_) glDeleteBuffers(1, &vbo_);
+  if (ibo_) glDeleteBuffers(1, &ibo_);
+}
+
+bool SceneRenderer::init(const World& world, char* message, unsigned message_size) {
+  world_ = &world;
+  if (world.lights.size() > kMaxLights) {
+    std::snprintf(message, message_size, "the scene has %zu semi-dynamic lights; the renderer draws flames of at most %u",
+                  world.lights.size(), kMaxLights);
+    return false;
+  }
+  const char* const attributes[] = {"a_position", "a_lightmap_uv", "a_albedo", "a_emissive", "a_flame", nullptr};
+  program_ = build_program(kVertexShader, kFragmentShader, attributes, message, message_size);
+  if (!program_) return false;
+  view_projection_location_ = glGetUniformLocation(program_, "u_view_projection");
+  light_map_location_ = glGetUniformLocation(program_, "u_light_map");
+  exposure_location_ = glGetUniformLocation(program_, "u_exposure");
+  flames_location_ = glGetUniformLocation(program_, "u_flames");
+
+  glGenVertexArrays(1, &vao_);
+  glGenBuffers(1, &vbo_);
+  glGenBuffers(1, &ibo_);
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo_);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(world.vertices.size() * sizeof(WorldVertex)),
+               world.vertices.data(), GL_STATIC_DRAW);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(world.indices.size() * sizeof(uint32_t)),
+               world.indices.data(), GL_STATIC_DRAW);
+  const GLsizei stride = sizeof(WorldVertex);
+  auto at = [](size_t offset) { return reinterpret_cast<const void*>(offset); };
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, at(offsetof(WorldVertex, position)));
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, stride, at(offsetof(WorldVertex, lightmap_uv)));
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, stride, at(offsetof(WorldVertex, albedo)));
+  glEnableVertexAttribArray(3);
+  glVertexAttribPointer(3, 3, GL_FLOAT, GL_FALSE, stride, at(offsetof(WorldVertex, emissive)));
+  glEnableVertexAttribArray(4);
+  glVertexAttribPointer(4, 1, GL_FLOAT, GL_FALSE, stride, at(offsetof(WorldVertex, flame)));
+  glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  if (glGetError() != GL_NO_ERROR) {
+    std::snprintf(message, message_size, "uploading the scene's geometry failed (out of GPU memory?)");
+    return false;
+  }
+  return true;
+}
+
+void SceneRenderer::draw(const Frame& frame) {
+  glViewport(0, 0, frame.viewport_width, frame.viewport_height);
+  glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+  glClearDepthf(1.0f);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  if (world_->double_sided) {
+    glDisable(GL_CULL_FACE);
+  } else {
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);
+  }
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glUseProgram(program_);
+  glUniformMatrix4fv(view_projection_location_, 1, GL_FALSE, glm::value_ptr(frame.view_projection));
+  glUniform1f(exposure_location_, frame.exposure);
+  float flames[kMaxLights] = {};
+  for (size_t l = 0; l < world_->lights.size(); ++l) flames[l] = frame.flame[l];
+  glUniform4fv(flames_location_, kMaxLights / 4, flames);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, frame.light_map);
+  glUniform1i(light_map_location_, 0);
+  glBindVertexArray(vao_);
+  auto draw_range = [](const IndexRange& r) {
+    if (r.count == 0) return;
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(static_cast<size_t>(r.first) * sizeof(uint32_t)));
+  };
+  draw_range(world_->static_range);
+  for (size_t o = 0; o < world_->objects.size(); ++o) {
+    if (frame.object_visible[o]) draw_range(world_->objects[o].range);
+  }
+  glBindVertexArray(0);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glUseProgram(0);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+}
+
+}  // namespace lightpatch::inn

@@ -1,0 +1,36 @@
+#version 300 es
+// Decodes a patch texel (pack_format.h: x = q/255, linear or squared, times scale and sign) and
+// outputs it times the draw's factor; the target adds it with blending (ONE, ONE).
+precision highp float;
+precision highp int;
+
+uniform highp sampler2D u_atlas[8];
+uniform vec3 u_factor;
+
+in vec2 v_atlas;
+flat in vec4 v_mask_r;
+flat in vec4 v_mask_g;
+flat in vec4 v_mask_b;
+flat in float v_scale;
+flat in int v_square;
+flat in int v_unit;
+
+out vec4 o_color;
+
+void main() {
+  // v_atlas is at texel centres (n + 0.5); texelFetch needs no derivatives, so the branch on the
+  // unit is fine (sampler arrays only take constant indices in GLSL ES 3.00).
+  ivec2 t = ivec2(floor(v_atlas));
+  vec4 q;
+  if (v_unit == 0) q = texelFetch(u_atlas[0], t, 0);
+  else if (v_unit == 1) q = texelFetch(u_atlas[1], t, 0);
+  else if (v_unit == 2) q = texelFetch(u_atlas[2], t, 0);
+  else if (v_unit == 3) q = texelFetch(u_atlas[3], t, 0);
+  else if (v_unit == 4) q = texelFetch(u_atlas[4], t, 0);
+  else if (v_unit == 5) q = texelFetch(u_atlas[5], t, 0);
+  else if (v_unit == 6) q = texelFetch(u_atlas[6], t, 0);
+  else q = texelFetch(u_atlas[7], t, 0);
+  vec3 x = vec3(dot(q, v_mask_r), dot(q, v_mask_g), dot(q, v_mask_b));
+  if (v_square == 1) x *= x;
+  o_color = vec4(x * (v_scale * u_factor), 0.0);
+}

@@ -1,0 +1,36 @@
+#version 300 es
+// One light patch's quad: copies an atlas rectangle to the same-size rectangle of the target.
+// Positions and atlas coordinates are in texels, row 0 = top (texture row 0); no flip anywhere.
+precision highp float;
+precision highp int;
+
+layout(location = 0) in vec2 a_dest;    // target texel corner
+layout(location = 1) in vec2 a_atlas;   // atlas texel corner
+// x: scale * sign (shadow groups and kFlagNegative patches are negative), y: first channel,
+// z: channel count (1 or 3), w: encoding (0 linear, 1 square)
+layout(location = 2) in vec4 a_patch;
+layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0..7)
+
+uniform vec2 u_target_size;
+
+out vec2 v_atlas;
+flat out vec4 v_mask_r;
+flat out vec4 v_mask_g;
+flat out vec4 v_mask_b;
+flat out float v_scale;
+flat out int v_square;
+flat out int v_unit;
+
+vec4 channel_mask(float c) { return vec4(equal(vec4(c), vec4(0.0, 1.0, 2.0, 3.0))); }
+
+void main() {
+  v_atlas = a_atlas;
+  float step = a_patch.z > 1.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
+  v_mask_r = channel_mask(a_patch.y);
+  v_mask_g = channel_mask(a_patch.y + step);
+  v_mask_b = channel_mask(a_patch.y + 2.0 * step);
+  v_scale = a_patch.x;
+  v_square = a_patch.w > 0.5 ? 1 : 0;
+  v_unit = int(a_unit + 0.5);
+  gl_Position = vec4(a_dest / u_target_size * 2.0 - 1.0, 0.0, 1.0);
+}

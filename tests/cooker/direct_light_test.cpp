@@ -1,0 +1,262 @@
+// Analytic checks of direct light (KHR_lights_punctual) baked through the Embree tracer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "direct_light.h"
+#include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/tracer.h"
+#include "test_scenes.h"
+
+namespace lightpatch::cooker {
+namespace {
+
+using test::add_quad;
+using test::grid_texels;
+
+constexpr int kN = 32;
+
+// A 10 m x 10 m floor at y = 0 facing +y, sampled kN x kN.
+Scene floor_scene() {
+  Scene s;
+  add_quad(s, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
+  return s;
+}
+TexelSet floor_texels(int n = kN, float half = 5.0f) {
+  return grid_texels(n, n, {-half, 0, -half}, {2 * half, 0, 0}, {0, 0, 2 * half}, {0, 1, 0});
+}
+
+BakedMaps bake(const Scene& scene, const TexelSet& texels, int area_samples = 0) {
+  auto tracer = make_embree_tracer(scene);
+  Progress progress(true);
+  Report report;
+  BakeOptions o;
+  o.area_samples = area_samples;
+  o.indirect = false;  // the analytic checks here are of direct light
+  return bake_maps(scene, test::bare_layout(texels.width, texels.height), texels, *tracer, o,
+                   progress, report);
+}
+
+float rel_err(float got, float want) { return std::fabs(got - want) / std::max(std::fabs(want), 1e-30f); }
+
+TEST(DirectLight, PointLightOverPlaneIsInverseSquareCosine) {
+  Scene scene = floor_scene();
+  const glm::vec3 lp(0.7f, 2.0f, -0.3f);
+  const float intensity = 10.0f;
+  Light l = test::point_light("bulb", lp, intensity);
+  l.color = glm::vec3(1.0f, 0.5f, 0.25f);
+  scene.lights.push_back(l);
+  test::finish(scene);
+  const TexelSet texels = floor_texels();
+  const BakedMaps maps = bake(scene, texels);
+  float worst = 0.0f;
+  for (int y = 0; y < kN; ++y) {
+    for (int x = 0; x < kN; ++x) {
+      const glm::vec3 p = texels.position[texels.index(x, y)];
+      const glm::vec3 d = lp - p;
+      const float dist = glm::length(d);
+      const float e = intensity * (d.y / dist) / (dist * dist);
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, rel_err(maps.base.at(x, y, c), e * l.color[c]));
+    }
+  }
+  EXPECT_LT(worst, 0.01f);
+  RecordProperty("max_relative_error", std::to_string(worst));
+  std::printf("point light: max relative error %.3g\n", worst);
+}
+
+TEST(DirectLight, SemiDynamicPointLightContributionIsUnitIntensity) {
+  Scene scene = floor_scene();
+  const glm::vec3 lp(0.0f, 1.5f, 0.0f);
+  scene.lights.push_back(test::point_light("lamp", lp, 7.0f, true));
+  test::finish(scene);
+  const TexelSet texels = floor_texels();
+  const BakedMaps maps = bake(scene, texels);
+  ASSERT_EQ(maps.contribution.size(), 1u);
+  ASSERT_EQ(maps.contribution[0].channels, 1);
+  float worst = 0.0f;
+  for (int y = 0; y < kN; ++y) {
+    for (int x = 0; x < kN; ++x) {
+      const glm::vec3 d = lp - texels.position[texels.index(x, y)];
+      const float dist = glm::length(d);
+      worst = std::max(worst, rel_err(maps.contribution[0].at(x, y, 0), (d.y / dist) / (dist * dist)));
+      EXPECT_EQ(maps.base.at(x, y, 0), 0.0f);
+    }
+  }
+  EXPECT_LT(worst, 0.01f);
+}
+
+TEST(DirectLight, SpotLightInsideInnerAndOutsideOuterCone) {
+  Scene scene = floor_scene();
+  const glm::vec3 lp(0.0f, 3.0f, 0.0f);
+  const float inner = 0.3f, outer = 0.5f, intensity = 20.0f;
+  scene.lights.push_back(test::spot_light("spot", lp, {0, -1, 0}, intensity, inner, outer));
+  test::finish(scene);
+  const TexelSet texels = floor_texels(48, 3.0f);
+  const BakedMaps maps = bake(scene, texels);
+  int inside = 0, outside = 0, between = 0;
+  float worst = 0.0f;
+  const float scale = 1.0f / (std::cos(inner) - std::cos(outer));
+  for (int y = 0; y < texels.height; ++y) {
+    for (int x = 0; x < texels.width; ++x) {
+      const glm::vec3 p = texels.position[texels.index(x, y)];
+      const glm::vec3 d = lp - p;
+      const float dist = glm::length(d);
+      const float angle = std::acos(d.y / dist);
+      const float e = intensity * (d.y / dist) / (dist * dist);
+      const float got = maps.base.at(x, y, 0);
+      if (angle < inner) {
+        worst = std::max(worst, rel_err(got, e));
+        ++inside;
+      } else if (angle > outer) {
+        EXPECT_EQ(got, 0.0f) << "outside the outer cone at " << x << "," << y;
+        ++outside;
+      } else {
+        const float a = std::clamp(std::cos(angle) * scale - std::cos(outer) * scale, 0.0f, 1.0f);
+        if (a * a * e > 1e-3f * intensity) worst = std::max(worst, rel_err(got, a * a * e));
+        ++between;
+      }
+    }
+  }
+  EXPECT_GT(inside, 50);
+  EXPECT_GT(outside, 50);
+  EXPECT_GT(between, 20);
+  EXPECT_LT(worst, 0.01f);
+  std::printf("spot light: max relative error %.3g\n", worst);
+}
+
+TEST(DirectLight, DirectionalLightIsSunTimesCosine) {
+  Scene scene = floor_scene();
+  const glm::vec3 dir = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+  scene.lights.push_back(test::directional_light("sun", dir, 5.0f));
+  test::finish(scene);
+  const TexelSet texels = floor_texels();
+  const BakedMaps maps = bake(scene, texels);
+  const float want = 5.0f * -dir.y;
+  float worst = 0.0f;
+  for (float v : maps.base.data) worst = std::max(worst, rel_err(v, want));
+  EXPECT_LT(worst, 0.01f);
+}
+
+TEST(DirectLight, BoxCastsHardShadowOfKnownOutline) {
+  Scene scene = floor_scene();
+  // Light at height 4 over a box whose top face (height 1.5, half-size 0.5) projects to a square
+  // of half-size 0.5 * 4 / 2.5 = 0.8 on the floor.
+  test::add_box(scene, {-0.5f, 1.0f, -0.5f}, {0.5f, 1.5f, 0.5f}, "box");
+  const glm::vec3 lp(0.0f, 4.0f, 0.0f);
+  scene.lights.push_back(test::point_light("bulb", lp, 16.0f));
+  test::finish(scene);
+  const int n = 80;
+  const TexelSet texels = floor_texels(n, 2.0f);
+  const BakedMaps maps = bake(scene, texels);
+  int dark = 0, lit = 0;
+  float worst = 0.0f;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const glm::vec3 p = texels.position[texels.index(x, y)];
+      const float r = std::max(std::fabs(p.x), std::fabs(p.z));
+      const glm::vec3 d = lp - p;
+      const float dist = glm::length(d);
+      const float e = 16.0f * (d.y / dist) / (dist * dist);
+      const float got = maps.base.at(x, y, 0);
+      if (r < 0.8f - 0.03f) {
+        EXPECT_EQ(got, 0.0f) << "inside the shadow at " << p.x << "," << p.z;
+        ++dark;
+      } else if (r > 0.8f + 0.03f) {
+        worst = std::max(worst, rel_err(got, e));
+        ++lit;
+      }
+    }
+  }
+  EXPECT_GT(dark, 500);
+  EXPECT_GT(lit, 3000);
+  EXPECT_LT(worst, 0.01f);
+}
+
+TEST(DirectLight, SphereLightGivesPenumbraAndMatchesPointFarAway) {
+  Scene scene = floor_scene();
+  test::add_box(scene, {-0.5f, 1.0f, -0.5f}, {0.5f, 1.5f, 0.5f}, "box");
+  const glm::vec3 lp(0.0f, 4.0f, 0.0f);
+  Light l = test::point_light("bulb", lp, 16.0f);
+  l.radius = 0.3f;
+  scene.lights.push_back(l);
+  test::finish(scene);
+  const int n = 64;
+  const TexelSet texels = floor_texels(n, 2.0f);
+  const BakedMaps maps = bake(scene, texels, 64);
+  int penumbra = 0;
+  float worst_far = 0.0f;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const glm::vec3 p = texels.position[texels.index(x, y)];
+      const glm::vec3 d = lp - p;
+      const float dist = glm::length(d);
+      const float e = 16.0f * (d.y / dist) / (dist * dist);
+      const float got = maps.base.at(x, y, 0);
+      ASSERT_TRUE(std::isfinite(got));
+      if (got > 0.05f * e && got < 0.95f * e) ++penumbra;
+      if (std::max(std::fabs(p.x), std::fabs(p.z)) > 1.4f) worst_far = std::max(worst_far, rel_err(got, e));
+    }
+  }
+  EXPECT_GT(penumbra, 40);
+  EXPECT_LT(worst_far, 0.02f);  // a disc of radius r at distance d differs from a point by ~(r/d)^2
+}
+
+TEST(DirectLight, EmissiveSquareOverPointMatchesFormFactor) {
+  Scene scene;
+  Material plain;
+  Material glow;
+  glow.emissive = glm::vec3(1.0f);
+  scene.materials = {plain, glow};
+  add_quad(scene, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
+  // A 2 x 2 emitter 1 m above the texel, facing down.
+  add_quad(scene, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}, "panel", -1, 1);
+  test::finish(scene);
+  const TexelSet texels = grid_texels(1, 1, {-1e-3f, 0, -1e-3f}, {2e-3f, 0, 0}, {0, 0, 2e-3f}, {0, 1, 0});
+  const BakedMaps maps = bake(scene, texels, 16384);
+  // Parallel rectangle over a corner (a = b = c = 1): F = (1/pi) * (1/sqrt2) * atan(1/sqrt2);
+  // the centre sees four such; E = pi * L * F_total.
+  const double fc = (1.0 / M_PI) * (1.0 / std::sqrt(2.0)) * std::atan(1.0 / std::sqrt(2.0));
+  const double want = M_PI * 4.0 * fc;
+  const double got = maps.base.at(0, 0, 1);
+  std::printf("emissive: got %.5f want %.5f (error %.3g)\n", got, want, std::fabs(got - want) / want);
+  EXPECT_NEAR(got, want, 0.01 * want);
+}
+
+TEST(DirectLight, LightTouchingSurfaceStaysFinite) {
+  Scene scene = floor_scene();
+  Light l = test::point_light("touch", {0.0f, 0.0f, 0.0f}, 1e6f);
+  scene.lights.push_back(l);
+  l.name = "touch_soft";
+  l.radius = 0.2f;
+  l.position = {1.0f, 0.05f, 1.0f};
+  scene.lights.push_back(l);
+  test::finish(scene);
+  const TexelSet texels = floor_texels(kN, 1.5f);
+  const BakedMaps maps = bake(scene, texels);
+  for (float v : maps.base.data) {
+    ASSERT_TRUE(std::isfinite(v));
+    ASSERT_GE(v, 0.0f);
+  }
+}
+
+TEST(DirectLight, RangeWindowAndSpotFalloffFollowTheSpec) {
+  EXPECT_FLOAT_EQ(range_window(0.0f, 100.0f), 1.0f);
+  EXPECT_FLOAT_EQ(range_window(2.0f, 1.0f), 1.0f - 1.0f / 16.0f);
+  EXPECT_FLOAT_EQ(range_window(2.0f, 3.0f), 0.0f);
+  Light spot = test::spot_light("s", {0, 0, 0}, {0, 0, -1}, 1.0f, 0.2f, 0.4f);
+  EXPECT_FLOAT_EQ(spot_attenuation(spot, {0, 0, -1}), 1.0f);
+  const float a = 0.3f;
+  const float scale = 1.0f / (std::cos(0.2f) - std::cos(0.4f));
+  const float want = std::pow((std::cos(a) - std::cos(0.4f)) * scale, 2.0f);
+  EXPECT_NEAR(spot_attenuation(spot, {std::sin(a), 0, -std::cos(a)}), want, 1e-5f);
+  EXPECT_FLOAT_EQ(spot_attenuation(spot, {std::sin(0.5f), 0, -std::cos(0.5f)}), 0.0f);
+  Light p = test::point_light("p", {0, 2, 0}, 1.0f);
+  p.range = 3.0f;
+  const float e = punctual_irradiance(p, p.position, {0, 0, 0}, {0, 1, 0}, 0.0f);
+  EXPECT_NEAR(e, 0.25f * (1.0f - std::pow(2.0f / 3.0f, 4.0f)), 1e-6f);
+  EXPECT_EQ(punctual_irradiance(p, p.position, {0, 0, 0}, {0, -1, 0}, 0.0f), 0.0f);
+  EXPECT_FLOAT_EQ(light_reach(p, 1e-6f), 3.0f);
+}
+
+}  // namespace
+}  // namespace lightpatch::cooker

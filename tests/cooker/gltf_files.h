@@ -1,0 +1,71 @@
+// glTF files for the import, CLI and Draco tests: small scenes written with scenegen, a scratch
+// folder per test, and the means to edit a valid file into a hostile one (its JSON, its binary
+// data, its .glb container).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lightpatch/scenegen/scene_builder.h"
+
+namespace lightpatch::test {
+
+// A fresh folder named after the running test, removed when the object goes out of scope.
+class ScratchDir {
+ public:
+  ScratchDir();
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  // Names of the entries in the folder, sorted (to check that nothing was left behind).
+  std::vector<std::string> entries() const;
+
+ private:
+  std::filesystem::path path_;
+};
+
+std::vector<std::uint8_t> read_bytes(const std::string& path);
+void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes);
+void write_text(const std::string& path, const std::string& text);
+
+// A glTF document split into its JSON and its one binary buffer (the .glb BIN chunk or .bin file).
+struct GltfParts {
+  nlohmann::ordered_json json;
+  std::vector<std::uint8_t> bin;
+};
+
+GltfParts parts_of(const scenegen::SceneBuilder& builder, const scenegen::WriteOptions& options = {});
+GltfParts split_glb(const std::vector<std::uint8_t>& glb);
+std::vector<std::uint8_t> join_glb(const GltfParts& parts);
+// Writes `parts` as `stem`.gltf with the buffer in `stem`.bin beside it; returns the .gltf path.
+std::string write_gltf(const ScratchDir& dir, const std::string& stem, GltfParts parts);
+// Writes `parts` as `stem`.glb; returns its path.
+std::string write_glb(const ScratchDir& dir, const std::string& stem, const GltfParts& parts);
+
+// Byte offset in the buffer of component `component` of element `element` of float accessor
+// `accessor` (tightly packed or strided views).
+std::size_t float_offset(const GltfParts& parts, int accessor, std::size_t element, int component);
+void set_float(GltfParts& parts, int accessor, std::size_t element, int component, float value);
+float get_float(const GltfParts& parts, int accessor, std::size_t element, int component);
+// Overwrites index `element` of an unsigned index accessor (uint16 or uint32).
+void set_index(GltfParts& parts, int accessor, std::size_t element, std::uint32_t value);
+
+std::string base64(const std::vector<std::uint8_t>& data);
+
+// A small scene that exercises everything the cooks need (a few hundred triangles):
+// a 4 m x 4 m floor ("floor"), a static box ("pillar"), a semi-dynamic box ("crate") on the
+// floor, a semi-dynamic point light ("lamp", radius 0 or `lamp_radius`) and a static spot light
+// ("spot") aimed at the floor. Light-map UVs are left to the cooker's unwrap.
+scenegen::SceneBuilder small_room(float lamp_radius = 0.0f);
+
+// The same room with light-map UVs (TEXCOORD_1) of its own: every face a cell of a 4 x 4 grid in
+// [0,1]^2, so the cooker uses them verbatim and the layout does not depend on vertex order.
+scenegen::SceneBuilder small_room_with_uv1();
+
+}  // namespace lightpatch::test

@@ -1,0 +1,310 @@
+// Indirect light with small, fast settings (unit tests, also run under ASan): the kd-tree, energy
+// in a closed box, stability at albedo near 1, lost photons, colour bleeding, and recomposition
+// against bake-state for one object at a time. indirect_quality_test.cpp has the production runs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "indirect_test_scenes.h"
+#include "kd_tree.h"
+#include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/tracer.h"
+
+namespace lightpatch::cooker {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+TEST(KdTree, TopLevelsAreDistinctAndNearestIsExact) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<glm::vec3> pts(1000);
+  for (glm::vec3& p : pts) p = {u(rng), u(rng), u(rng)};
+  const KdTree tree(pts);
+  std::vector<int> top = tree.top_levels(63);
+  ASSERT_EQ(top.size(), 63u);
+  std::sort(top.begin(), top.end());
+  EXPECT_EQ(std::unique(top.begin(), top.end()), top.end());
+  for (int q = 0; q < 200; ++q) {
+    const glm::vec3 p{u(rng), u(rng), u(rng)};
+    auto even = [](int i) { return i % 2 == 0; };
+    int best = -1;
+    float d2 = 1e30f;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const float d = glm::dot(pts[i] - p, pts[i] - p);
+      if (even(int(i)) && d < d2) {
+        d2 = d;
+        best = int(i);
+      }
+    }
+    EXPECT_EQ(tree.nearest(p, even), best);
+  }
+  EXPECT_EQ(tree.nearest({0, 0, 0}, [](int) { return false; }), -1);
+}
+
+struct FurnaceResult {
+  double flux = 0.0;
+  bool finite = true;
+};
+
+// Total incident flux sum(E * area) over the inner faces of the closed box, light of 1 cd.
+FurnaceResult furnace(float rho, const BakeOptions& o, int n, bool semi = false) {
+  Scene s = test::furnace_box(rho);
+  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f, semi)};
+  const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
+  auto tracer = make_embree_tracer(s);
+  Progress progress(true);
+  Report report;
+  const BakedMaps maps =
+      bake_maps(s, test::bare_layout(texels.width, texels.height), texels, *tracer, o, progress, report);
+  FurnaceResult r;
+  for (size_t t = 0; t < texels.position.size(); ++t) {
+    const int x = int(t % size_t(texels.width)), y = int(t / size_t(texels.width));
+    for (int c = 0; c < 3; ++c) {
+      const float e = semi ? maps.contribution[0].at(x, y, c) : maps.base.at(x, y, c);
+      r.finite = r.finite && std::isfinite(e);
+      if (c == 0) r.flux += double(e) * test::box_texel_area({-1, -1, -1}, {1, 1, 1}, n, t);
+    }
+  }
+  return r;
+}
+
+// Without the area bias the virtual lights' form factors conserve energy: what is left is photon
+// noise and the texel grid.
+TEST(Indirect, FurnaceConservesEnergyWithoutBias) {
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  o.area_bias = 0.0f;
+  o.photons = 20000;
+  o.virtual_lights = 128;
+  for (bool semi : {false, true}) {
+    const FurnaceResult r = furnace(0.5f, o, 12, semi);
+    const double expected = 4.0 * kPi / (1.0 - 0.5);
+    std::printf("furnace rho 0.5, bias 0, %s: %.4f vs %.4f (%+.2f%%)\n", semi ? "C_l" : "B", r.flux,
+                expected, 100.0 * (r.flux / expected - 1.0));
+    EXPECT_TRUE(r.finite);
+    EXPECT_NEAR(r.flux / expected, 1.0, 0.03);
+  }
+}
+
+TEST(Indirect, AlbedoNearOneStaysFinite) {
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  o.photons = 1500;
+  o.virtual_lights = 32;
+  const FurnaceResult r = furnace(0.99f, o, 6);
+  EXPECT_TRUE(r.finite);
+  const double expected = 4.0 * kPi / (1.0 - 0.99);
+  std::printf("furnace rho 0.99 (draft): %.2f vs %.2f\n", r.flux, expected);
+  EXPECT_GT(r.flux, 0.5 * expected);
+  EXPECT_LT(r.flux, 1.2 * expected);
+}
+
+bool has_decision(Report& report, const std::string& what, bool taken, const std::string& in_reason) {
+  for (const auto& d : report.root()["decisions"]) {
+    if (d["what"].get<std::string>() == what && d["taken"].get<bool>() == taken &&
+        d["reason"].get<std::string>().find(in_reason) != std::string::npos) {
+      return true;
+    }
+  }
+  return false;
+}
+
+TEST(Indirect, LostPhotonsAreReportedNotLoopedOn) {
+  Scene s;
+  test::add_quad(s, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
+  // Two spots above an open floor, shining up: every photon leaves the scene.
+  s.lights = {test::spot_light("sky", {1, 1, 0}, {0, 1, 0}, 10.0f, 0.2f, 0.4f),
+              test::spot_light("up", {0, 1, 0}, {0, 1, 0}, 10.0f, 0.2f, 0.4f, true)};
+  test::finish(s);
+  const TexelSet texels = test::grid_texels(8, 8, {-4, 0, -4}, {8, 0, 0}, {0, 0, 8}, {0, 1, 0});
+  auto tracer = make_embree_tracer(s);
+  Progress progress(true);
+  Report report;
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  const BakedMaps maps = bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
+  EXPECT_TRUE(has_decision(report, "indirect light: static lights", false, "left the scene"));
+  EXPECT_TRUE(has_decision(report, "indirect light: up", false, "left the scene"));
+  ASSERT_EQ(maps.contribution.size(), 1u);
+  EXPECT_EQ(maps.contribution[0].channels, 1);  // no bounce: one channel
+}
+
+// A red wall and a white wall meeting at a corner on a grey floor; a semi-dynamic spot lights the
+// red wall only. The white wall gets red-tinted bounce, carried by C_l's three channels, and the
+// recomposed tint follows the light's colour and intensity.
+struct ColourScene {
+  Scene scene;
+  TexelSet texels;  // on the white wall
+  ColourScene() {
+    Material grey;
+    grey.albedo = glm::vec3(0.5f);
+    Material red;
+    red.albedo = glm::vec3(0.9f, 0.1f, 0.1f);
+    Material white;
+    white.albedo = glm::vec3(0.9f);
+    scene.materials = {grey, red, white};
+    test::add_quad(scene, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, "floor", -1, 0);
+    // Red wall at x = -2 facing +x; white wall at z = -2 facing +z.
+    test::add_quad(scene, {-2, 0, -2}, {-2, 2, -2}, {-2, 2, 2}, {-2, 0, 2}, "red", -1, 1);
+    test::add_quad(scene, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, "white", -1, 2);
+    scene.lights = {test::spot_light("spot", {0.0f, 1.0f, 0.5f}, {-1, 0, 0}, 20.0f, 0.2f, 0.35f, true)};
+    test::finish(scene);
+    texels = test::grid_texels(16, 8, {-2, 0, -2}, {4, 0, 0}, {0, 2, 0}, {0, 0, 1});
+  }
+};
+
+TEST(Indirect, ColourBleedingFollowsTheLight) {
+  ColourScene f;
+  auto tracer = make_embree_tracer(f.scene);
+  Progress progress(true);
+  Report report;
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  o.photons = 10000;
+  const Layout layout = test::bare_layout(16, 8);
+  const BakedMaps maps = bake_maps(f.scene, layout, f.texels, *tracer, o, progress, report);
+  ASSERT_EQ(maps.contribution.size(), 1u);
+  const FloatImage& c = maps.contribution[0];
+  ASSERT_EQ(c.channels, 3);
+  // Near the corner with the red wall the white wall's light is red.
+  double r = 0.0, g = 0.0;
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 4; ++x) {
+      r += c.at(x, y, 0);
+      g += c.at(x, y, 1);
+      EXPECT_NEAR(c.at(x, y, 1), c.at(x, y, 2), 1e-6f * std::max(1.0f, c.at(x, y, 1)));
+    }
+  }
+  EXPECT_GT(g, 0.0);
+  EXPECT_GT(r, 2.0 * g);
+  // Recomposition B + colour * intensity * C_l against direct bakes of two states.
+  struct St {
+    glm::vec3 color;
+    float intensity;
+  };
+  for (const St& st : {St{{1.0f, 1.0f, 1.0f}, 20.0f}, St{{0.3f, 0.6f, 1.0f}, 45.0f}}) {
+    StateSpec state;
+    LightOverride lo;
+    lo.has_color = true;
+    lo.color[0] = st.color.x;
+    lo.color[1] = st.color.y;
+    lo.color[2] = st.color.z;
+    lo.has_intensity = true;
+    lo.intensity = st.intensity;
+    state.lights["spot"] = lo;
+    const FloatImage direct = bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+    double rr = 0.0, gg = 0.0;
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 16; ++x) {
+        for (int k = 0; k < 3; ++k) {
+          const float v = maps.base.at(x, y, k) + st.color[k] * st.intensity * c.at(x, y, k);
+          EXPECT_NEAR(v, direct.at(x, y, k), 1e-5f * std::max(1.0f, direct.at(x, y, k)));
+        }
+        if (x < 4) {
+          rr += direct.at(x, y, 0);
+          gg += direct.at(x, y, 1);
+        }
+      }
+    }
+    // The tint is the walls' times the light's.
+    EXPECT_NEAR(rr / gg, (r / g) * (st.color.x / st.color.y), 1e-3 * rr / gg);
+  }
+}
+
+// A room with a box, a semi-dynamic light; the box blocks bounce light and adds its own (a red
+// box: S_ol is negative where its bounce lands). Recomposition equals bake-state for each
+// single-object state, and one cook does not depend on the thread count.
+struct BoxRoom {
+  Scene scene;
+  TexelSet texels;
+  BoxRoom() {
+    Material wall;
+    wall.albedo = glm::vec3(0.7f);
+    Material red;
+    red.albedo = glm::vec3(0.9f, 0.2f, 0.1f);
+    scene.materials = {wall, red};
+    test::add_closed_room(scene, {-2, 0, -2}, {2, 2.5f, 2}, 0.1f, "room");
+    Object o;
+    o.name = "crate";
+    scene.objects.push_back(o);
+    test::add_box(scene, {-0.4f, 0.0f, -0.4f}, {0.4f, 0.8f, 0.4f}, "crate", 0, 1);
+    Object o2;
+    o2.name = "stool";
+    scene.objects.push_back(o2);
+    test::add_box(scene, {1.0f, 0.0f, 1.0f}, {1.4f, 0.5f, 1.4f}, "stool", 1, 0);
+    scene.lights = {test::point_light("lamp", {0.3f, 2.0f, -0.6f}, 5.0f, true)};
+    test::finish(scene);
+    texels = test::box_texels({-2, 0, -2}, {2, 2.5f, 2}, 10);
+  }
+};
+
+TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
+  BoxRoom f;
+  auto tracer = make_embree_tracer(f.scene);
+  Progress progress(true);
+  Report report;
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  o.photons = 5000;
+  o.virtual_lights = 64;
+  const Layout layout = test::bare_layout(f.texels.width, f.texels.height);
+  const BakedMaps maps = bake_maps(f.scene, layout, f.texels, *tracer, o, progress, report);
+  ASSERT_EQ(maps.contribution.size(), 1u);
+  ASSERT_EQ(maps.contribution[0].channels, 3);
+  const ShadowMap* crate = nullptr;
+  for (const ShadowMap& s : maps.shadows) {
+    if (s.object == 0) crate = &s;
+  }
+  ASSERT_NE(crate, nullptr);
+  float most_negative = 0.0f;
+  for (float v : crate->map.data) most_negative = std::min(most_negative, v);
+  EXPECT_LT(most_negative, 0.0f) << "the crate's bounce should add light somewhere";
+
+  for (int visible = 0; visible < 4; ++visible) {
+    const bool crate_on = visible & 1, stool_on = visible & 2;
+    if (crate_on && stool_on) continue;  // two objects: the paper's overlap approximation
+    StateSpec state;
+    state.objects["crate"] = crate_on;
+    state.objects["stool"] = stool_on;
+    LightOverride lo;
+    lo.has_color = true;
+    lo.color[0] = 1.0f;
+    lo.color[1] = 0.7f;
+    lo.color[2] = 0.4f;
+    state.lights["lamp"] = lo;
+    const FloatImage direct = bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+    float worst = 0.0f, peak = 0.0f;
+    for (int y = 0; y < f.texels.height; ++y) {
+      for (int x = 0; x < f.texels.width; ++x) {
+        for (int k = 0; k < 3; ++k) {
+          float t = maps.contribution[0].at(x, y, k);
+          for (const ShadowMap& s : maps.shadows) {
+            if ((s.object == 0 && crate_on) || (s.object == 1 && stool_on)) t -= s.map.at(x, y, k);
+          }
+          const float v = maps.base.at(x, y, k) + lo.color[size_t(k)] * 5.0f * t;
+          worst = std::max(worst, std::fabs(v - direct.at(x, y, k)));
+          peak = std::max(peak, direct.at(x, y, k));
+        }
+      }
+    }
+    EXPECT_LE(worst, 1e-4f * peak) << "crate " << crate_on << " stool " << stool_on;
+  }
+
+  BakeOptions one = o, two = o;
+  one.threads = 1;
+  two.threads = 2;
+  Report r1, r2;
+  const BakedMaps a = bake_maps(f.scene, layout, f.texels, *tracer, one, progress, r1);
+  const BakedMaps b = bake_maps(f.scene, layout, f.texels, *tracer, two, progress, r2);
+  EXPECT_EQ(a.base.data, b.base.data);
+  EXPECT_EQ(a.contribution[0].data, b.contribution[0].data);
+  ASSERT_EQ(a.shadows.size(), b.shadows.size());
+  for (size_t k = 0; k < a.shadows.size(); ++k) EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
+}
+
+}  // namespace
+}  // namespace lightpatch::cooker

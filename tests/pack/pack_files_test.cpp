@@ -1,0 +1,167 @@
+// The committed test packs stay true to the cooker; golden bytes of format version 1; hostile
+// packs (truncated, bytes flipped) are refused cleanly or stay safe to use (run under ASan).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/pack_format.h"
+#include "lightpatch/pack_view.h"
+#include "synthetic.h"
+
+namespace lightpatch {
+namespace {
+
+// Golden values of tiny.lpk (format version 1).
+constexpr uint64_t kTinySize = 2816;
+constexpr uint32_t kTinyCrc = 0xe71dee31u;
+
+std::string data_path(const std::string& name) {
+  return std::string(LIGHTPATCH_TEST_DATA_DIR) + "/packs/" + name;
+}
+
+std::vector<uint8_t> read_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::vector<uint8_t>(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+// Keeps the committed packs byte-equal to what the cooker writes today. Set
+// LIGHTPATCH_REGENERATE_PACKS=1 to rewrite them after an intended change (then commit them and
+// copy them to tests/fuzz/corpus/pack/).
+void check_committed(const std::string& name, const std::vector<uint8_t>& built) {
+  if (std::getenv("LIGHTPATCH_REGENERATE_PACKS") != nullptr) {
+    std::ofstream f(data_path(name), std::ios::binary);
+    f.write(reinterpret_cast<const char*>(built.data()), std::streamsize(built.size()));
+  }
+  const std::vector<uint8_t> committed = read_bytes(data_path(name));
+  EXPECT_EQ(committed.size(), built.size()) << name;
+  EXPECT_TRUE(committed == built) << name << " differs from the cooker's output";
+}
+
+TEST(PackFiles, CommittedPacksMatchTheCooker) {
+  check_committed("small.lpk", test::build_small_pack());
+  check_committed("tiny.lpk", test::build_tiny_pack());
+}
+
+TEST(PackFiles, GoldenBytesOfVersion1) {
+  const std::vector<uint8_t> b = test::build_tiny_pack();
+  ASSERT_GE(b.size(), 64u);
+  EXPECT_EQ(std::memcmp(b.data(), "LPK1", 4), 0);
+  uint32_t version;
+  std::memcpy(&version, b.data() + 4, 4);
+  EXPECT_EQ(version, 1u);
+  uint64_t file_size;
+  std::memcpy(&file_size, b.data() + 8, 8);
+  EXPECT_EQ(file_size, b.size());
+  // Field offsets pinned (also static_asserted in pack_format.h).
+  EXPECT_EQ(offsetof(pack::PatchRecord, scale), 16u);
+  EXPECT_EQ(sizeof(pack::PatchRecord), 24u);
+  EXPECT_EQ(offsetof(pack::Header, table_checksum), 20u);
+  EXPECT_EQ(offsetof(pack::LightRecord, intensity), 20u);
+  EXPECT_EQ(offsetof(pack::MeshRecord, object), 40u);
+  // The whole file: any change to the writer, the quantizer or the packer shows here.
+  EXPECT_EQ(b.size(), kTinySize);
+  EXPECT_EQ(crc32(b.data(), b.size()), kTinyCrc);
+}
+
+// A copy in 8-byte aligned storage, as the loader requires.
+struct Aligned {
+  std::vector<uint64_t> words;
+  uint64_t size = 0;
+  explicit Aligned(const std::vector<uint8_t>& b, uint64_t n) : words((n + 7) / 8 + 1), size(n) {
+    if (n > 0) std::memcpy(words.data(), b.data(), n);
+  }
+  uint8_t* data() { return reinterpret_cast<uint8_t*>(words.data()); }
+};
+
+TEST(PackFiles, TruncatedAtEveryByteIsRefused) {
+  for (const std::vector<uint8_t>& b : {test::build_tiny_pack(), test::build_small_pack()}) {
+    for (uint64_t n = 0; n < b.size(); ++n) {
+      Aligned a(b, n);
+      PackView v;
+      Error e;
+      ASSERT_NE(PackView::open(a.data(), n, &v, &e), Status::kOk) << "accepted " << n << " bytes";
+      ASSERT_FALSE(v.valid());
+      ASSERT_NE(e.message[0], '\0');
+    }
+  }
+}
+
+// Recomputes the table checksum of a (possibly corrupt) pack so that flips reach the record
+// validation; leaves it alone if the index itself is out of bounds.
+void fix_checksum(uint8_t* d, uint64_t size) {
+  pack::Header h;
+  std::memcpy(&h, d, sizeof(h));
+  if (h.section_count == 0 || h.section_count > 9) return;
+  const uint64_t index_bytes = uint64_t(h.section_count) * sizeof(pack::SectionEntry);
+  if (64 + index_bytes > size) return;
+  uint32_t crc = crc32(d + 64, index_bytes);
+  for (uint32_t i = 0; i < h.section_count; ++i) {
+    pack::SectionEntry e;
+    std::memcpy(&e, d + 64 + i * sizeof(e), sizeof(e));
+    if (e.type == pack::kSectionAtlasData || e.type == pack::kSectionMeshData) continue;
+    if (e.offset > size || e.length > size - e.offset) return;
+    crc = crc32(d + e.offset, e.length, crc);
+  }
+  std::memcpy(d + 20, &crc, 4);
+}
+
+// Uses everything a valid view exposes (ASan catches any read out of bounds).
+void exercise(const PackView& v) {
+  SceneState st;
+  CpuRecomposer r;
+  ASSERT_EQ(st.init(v, nullptr), Status::kOk);
+  ASSERT_EQ(r.init(v, nullptr), Status::kOk);
+  r.rebuild(st);
+  volatile float sink = r.rgb()[0];
+  (void)sink;
+  for (uint32_t i = 0; i < v.light_count(); ++i) (void)v.find_light(v.light_name(i).data, v.light_name(i).length);
+  for (uint32_t i = 0; i < v.mesh_count(); ++i) {
+    volatile uint32_t s = 0;
+    for (uint32_t k = 0; k < v.mesh(i).index_count; ++k) s = s + v.mesh_vertices(i)[v.mesh_indices(i)[k]].source_vertex;
+    (void)v.mesh_name(i);
+  }
+}
+
+TEST(PackFiles, FlippedBytesAreRefusedOrSafe) {
+  const std::vector<uint8_t> b = test::build_small_pack();
+  PackView original;
+  Aligned base(b, b.size());
+  ASSERT_EQ(PackView::open(base.data(), b.size(), &original, nullptr), Status::kOk);
+  // Every byte of the header, index and table sections (the atlas data is not validated beyond
+  // its bounds: any byte there is a valid texel).
+  uint64_t table_end = 0;
+  const pack::SectionEntry* entries = reinterpret_cast<const pack::SectionEntry*>(base.data() + 64);
+  for (uint32_t i = 0; i < original.header().section_count; ++i) {
+    if (entries[i].type != pack::kSectionAtlasData) table_end = std::max(table_end, entries[i].offset + entries[i].length);
+  }
+  int refused_raw = 0, refused_fixed = 0, accepted = 0;
+  for (uint64_t i = 0; i < table_end; ++i) {
+    for (uint8_t mask : {uint8_t(0xFF), uint8_t(0x01), uint8_t(0x80)}) {
+      Aligned a(b, b.size());
+      a.data()[i] ^= mask;
+      PackView v;
+      if (PackView::open(a.data(), b.size(), &v, nullptr) != Status::kOk) ++refused_raw; else exercise(v);
+      fix_checksum(a.data(), b.size());
+      Error e;
+      if (PackView::open(a.data(), b.size(), &v, &e) != Status::kOk) {
+        ++refused_fixed;
+        ASSERT_NE(e.message[0], '\0');
+      } else {
+        ++accepted;
+        exercise(v);
+      }
+    }
+  }
+  EXPECT_GT(refused_raw, 0);
+  EXPECT_GT(refused_fixed, 0);
+  EXPECT_GT(accepted, 0);  // e.g. a colour or scale changed to another valid value
+}
+
+}  // namespace
+}  // namespace lightpatch

@@ -1,0 +1,300 @@
+// Cooker maps -> patches -> atlases -> CPU recomposition reproduces the float maps within the
+// quantization bound.
+//
+// The bound, per texel and channel, for one map X reconstructed from its patches:
+//   |X_rec - X| <= t_X + sum over X's patches covering the texel of e_enc * scale
+// with t_X the significance threshold (half an 8-bit output step, divided by the light's
+// authored factor for C_l and S_ol: values below it are not stored) and e_enc the encoding's
+// worst case (patch_decode.h: 1/510 linear, 1/255 square). A recomposed C_l - S_ol adds the two.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/pack_builder.h"
+#include "lightpatch/cooker/report.h"
+#include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/pack_view.h"
+#include "lightpatch/patch_decode.h"
+#include "synthetic.h"
+
+namespace lightpatch {
+namespace {
+
+using namespace cooker;
+
+struct Built {
+  test::Synthetic s;
+  std::vector<uint8_t> bytes;
+  PackView view;
+  Report report;
+};
+
+void build(Built& b, const test::SyntheticOptions& o, EncodingPolicy policy = EncodingPolicy::kAuto) {
+  b.s = test::make_synthetic(o);
+  PackOptions po;
+  po.encoding = policy;
+  b.bytes = build_pack(b.s.scene, b.s.layout, b.s.maps, po, b.report);
+  Error e;
+  ASSERT_EQ(PackView::open(b.bytes.data(), b.bytes.size(), &b.view, &e), Status::kOk) << e.message;
+}
+
+float authored_factor(const Scene& scene, int scene_light) {
+  float s_max = 0.0f;
+  auto m3 = [](const glm::vec3& v) { return std::max({v.x, v.y, v.z}); };
+  for (const Light& l : scene.lights) s_max = std::max(s_max, m3(l.color) * l.intensity);
+  const Light& l = scene.lights[size_t(scene_light)];
+  return std::max(m3(l.color) * l.intensity, 1e-2f * s_max);
+}
+
+// Adds the bound of `group`'s patches to `bound` (per texel).
+void add_patch_bounds(const PackView& v, int32_t group, std::vector<double>& bound) {
+  if (group < 0) return;
+  const pack::GroupRecord& g = v.group(uint32_t(group));
+  for (uint32_t i = g.first_patch; i < g.first_patch + g.patch_count; ++i) {
+    const pack::PatchRecord& p = v.patch(i);
+    const double e = double(p.scale) *
+                     (p.encoding == pack::kEncodingSquare ? kSquareErrorBound : kLinearErrorBound) * 1.0001;
+    for (int y = p.dest_y; y < p.dest_y + p.height; ++y) {
+      for (int x = p.dest_x; x < p.dest_x + p.width; ++x) bound[size_t(y) * v.lightmap_width() + x] += e;
+    }
+  }
+}
+
+void set_all(SceneState& st, const PackView& v, bool lights_on, bool objects_visible) {
+  for (uint32_t l = 0; l < v.light_count(); ++l) st.set_light_on(l, lights_on);
+  for (uint32_t o = 0; o < v.object_count(); ++o) st.set_object_visible(o, objects_visible);
+}
+
+// Compares the recomposed map against `expected(x, y, c)` within bound + slack; returns the
+// largest error seen.
+template <typename F>
+double expect_within(const CpuRecomposer& r, const std::vector<double>& bound, F expected, const char* what) {
+  double worst = 0.0;
+  int failures = 0;
+  for (uint32_t y = 0; y < r.height(); ++y) {
+    for (uint32_t x = 0; x < r.width(); ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const double want = expected(int(x), int(y), c);
+        const double got = r.rgb()[(size_t(y) * r.width() + x) * 3 + c];
+        const double err = std::fabs(got - want);
+        worst = std::max(worst, err);
+        const double b = bound[size_t(y) * r.width() + x] + 1e-6 * std::fabs(want) + 1e-9;
+        if (err > b && failures++ < 5) {
+          ADD_FAILURE() << what << ": texel (" << x << "," << y << ") channel " << c << ": got " << got
+                        << ", want " << want << ", bound " << b;
+        }
+      }
+    }
+  }
+  return worst;
+}
+
+class RoundTrip : public ::testing::TestWithParam<EncodingPolicy> {};
+
+TEST_P(RoundTrip, RecomposedMapsMatchTheFloatMapsWithinTheQuantizationBound) {
+  Built b;
+  build(b, test::SyntheticOptions{}, GetParam());
+  const PackView& v = b.view;
+  const BakedMaps& maps = b.s.maps;
+  const size_t n = size_t(v.lightmap_width()) * v.lightmap_height();
+  SceneState st;
+  CpuRecomposer r;
+  ASSERT_EQ(st.init(v, nullptr), Status::kOk);
+  ASSERT_EQ(r.init(v, nullptr), Status::kOk);
+
+  // Base: every light off.
+  set_all(st, v, false, true);
+  r.rebuild(st);
+  std::vector<double> base_bound(n, 0.5 * maps.output_step);
+  add_patch_bounds(v, v.base_group(), base_bound);
+  const double base_err = expect_within(r, base_bound, [&](int x, int y, int c) { return maps.base.at(x, y, c); }, "base");
+  EXPECT_GT(base_err, 0.0);  // 8 bits cannot be exact on a gradient: the test measures something
+
+  for (uint32_t l = 0; l < v.light_count(); ++l) {
+    const FloatImage& cm = maps.contribution[l];
+    const double t = 0.5 * maps.output_step / authored_factor(b.s.scene, maps.lights[l]);
+    std::vector<double> cb(n, t);
+    add_patch_bounds(v, v.contribution_group(l), cb);
+    const float white[3] = {1, 1, 1};
+    // C_l alone: this light on (white, intensity 1), all objects hidden; subtract the base.
+    set_all(st, v, false, false);
+    st.set_light_on(l, true);
+    st.set_light_color(l, white);
+    st.set_light_intensity(l, 1.0f);
+    r.rebuild(st);
+    std::vector<double> with_base = cb;
+    for (size_t i = 0; i < n; ++i) with_base[i] += base_bound[i];
+    expect_within(r, with_base, [&](int x, int y, int c) {
+      return double(maps.base.at(x, y, c)) + cm.at(x, y, cm.channels == 3 ? c : 0);
+    }, "contribution");
+    for (uint32_t o = 0; o < v.object_count(); ++o) {
+      const ShadowMap* sm = nullptr;
+      for (const ShadowMap& s : maps.shadows) {
+        if (s.light == int(l) && s.object == int(o)) sm = &s;
+      }
+      if (sm == nullptr) {
+        EXPECT_LT(v.shadow_group(l, o), 0);
+        continue;
+      }
+      // A pack holds a shadow group exactly when the shadow map has a significant texel.
+      bool significant = false;
+      for (float x : sm->map.data) significant = significant || std::fabs(x) > t;
+      EXPECT_EQ(significant, v.shadow_group(l, o) >= 0) << "light " << l << " object " << o;
+      std::vector<double> sb = with_base;
+      for (size_t i = 0; i < n; ++i) sb[i] += t;
+      add_patch_bounds(v, v.shadow_group(l, o), sb);
+      st.set_object_visible(o, true);
+      r.rebuild(st);
+      expect_within(r, sb, [&](int x, int y, int c) {
+        const int k = cm.channels == 3 ? c : 0;
+        return double(maps.base.at(x, y, c)) + cm.at(x, y, k) - sm->map.at(x, y, k);
+      }, "contribution minus shadow");
+      st.set_object_visible(o, false);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Encodings, RoundTrip,
+                         ::testing::Values(EncodingPolicy::kAuto, EncodingPolicy::kLinear, EncodingPolicy::kSquare));
+
+TEST(PackBuilder, ReportsMeasuredErrorsAndTheChosenEncodingIsNoWorse) {
+  Built b;
+  build(b, test::SyntheticOptions{});
+  const auto& enc = b.report.root()["pack"]["encoding"];
+  const double lin = enc["linear"]["relative_rmse"].get<double>();
+  const double sq = enc["square"]["relative_rmse"].get<double>();
+  const double chosen = enc["chosen"]["relative_rmse"].get<double>();
+  EXPECT_GT(lin, 0.0);
+  EXPECT_GT(sq, 0.0);
+  // Per patch the smaller squared error is kept, so the total cannot exceed either candidate.
+  EXPECT_LE(chosen, std::min(lin, sq) * (1 + 1e-9));
+  EXPECT_LT(chosen, 0.01);  // well inside the 1% relative RMSE bar
+  EXPECT_EQ(enc["patches_linear"].get<int>() + enc["patches_square"].get<int>(),
+            b.report.root()["pack"]["patches"].get<int>());
+  const double ratio = b.report.root()["pack"]["atlas_to_lightmap_ratio"].get<double>();
+  EXPECT_GT(ratio, 0.0);
+  RecordProperty("linear_relative_rmse", std::to_string(lin));
+  RecordProperty("square_relative_rmse", std::to_string(sq));
+  RecordProperty("chosen_relative_rmse", std::to_string(chosen));
+  RecordProperty("atlas_to_lightmap_ratio", std::to_string(ratio));
+}
+
+TEST(PackBuilder, PatchesFollowRegionsSignsAndGroups) {
+  Built b;
+  build(b, test::SyntheticOptions{});
+  const PackView& v = b.view;
+  // The black region (bottom-right) carries no base patch; no patch crosses two regions.
+  const auto& regions = b.s.layout.regions;
+  int negative = 0;
+  for (uint32_t i = 0; i < v.patch_count(); ++i) {
+    const pack::PatchRecord& p = v.patch(i);
+    const Rect r{p.dest_x, p.dest_y, p.width, p.height};
+    int inside = 0;
+    for (const Region& g : regions) {
+      if (r.x >= g.rect.x && r.y >= g.rect.y && r.x + r.w <= g.rect.x + g.rect.w &&
+          r.y + r.h <= g.rect.y + g.rect.h) {
+        ++inside;
+        if (&g == &regions[3]) {
+          EXPECT_NE(v.group(p.group).kind, pack::kGroupBase);
+        }
+      }
+    }
+    EXPECT_EQ(inside, 1) << "patch " << i;
+    negative += (p.flags & pack::kFlagNegative) ? 1 : 0;
+    if (p.flags & pack::kFlagNegative) {
+      EXPECT_EQ(v.group(p.group).kind, pack::kGroupShadow);
+    }
+  }
+  EXPECT_GT(negative, 0);  // the bounce rims are kept, not clipped
+  // Light 0 is tinted: its patches are 3-channel where the tint exceeds half an output step
+  // (decided per patch), the others 1-channel; the base map is always 3-channel.
+  int tinted = 0;
+  for (uint32_t i = 0; i < v.patch_count(); ++i) {
+    const pack::GroupRecord& g = v.group(v.patch(i).group);
+    if (g.kind == pack::kGroupBase) {
+      EXPECT_EQ(v.patch(i).channel_count, 3);
+    } else if (g.light == 0) {
+      EXPECT_TRUE(v.patch(i).channel_count == 3 || v.patch(i).channel_count == 1);
+      tinted += v.patch(i).channel_count == 3 ? 1 : 0;
+    } else {
+      EXPECT_EQ(v.patch(i).channel_count, 1);
+    }
+  }
+  EXPECT_GT(tinted, 0);
+  EXPECT_EQ(v.mesh_count(), 4u);
+  EXPECT_TRUE(v.mesh_name(2).equals("region_2", 8));
+  EXPECT_EQ(v.mesh(0).object, 0);
+  EXPECT_EQ(v.mesh(3).object, pack::kNone16);
+}
+
+TEST(PackBuilder, GuttersReplicateEdgeTexels) {
+  Built b;
+  build(b, test::SyntheticOptions{});
+  const PackView& v = b.view;
+  for (uint32_t i = 0; i < v.patch_count(); ++i) {
+    const pack::PatchRecord& p = v.patch(i);
+    const pack::AtlasRecord& a = v.atlas(p.atlas);
+    ASSERT_GE(p.atlas_x, 1);
+    ASSERT_GE(p.atlas_y, 1);
+    ASSERT_LE(p.atlas_x + p.width + 1u, a.width);
+    ASSERT_LE(p.atlas_y + p.height + 1u, a.height);
+    const uint8_t* px = v.atlas_pixels(p.atlas);
+    auto at = [&](int x, int y, int c) { return px[(size_t(y) * a.width + x) * 4 + p.channel + c]; };
+    for (int y = -1; y <= p.height; ++y) {
+      for (int x = -1; x <= p.width; ++x) {
+        const int sx = std::clamp(x, 0, p.width - 1), sy = std::clamp(y, 0, p.height - 1);
+        for (int c = 0; c < p.channel_count; ++c) {
+          ASSERT_EQ(at(p.atlas_x + x, p.atlas_y + y, c), at(p.atlas_x + sx, p.atlas_y + sy, c))
+              << "patch " << i << " gutter (" << x << "," << y << ")";
+        }
+      }
+    }
+  }
+}
+
+TEST(PackBuilder, RejectsBadInput) {
+  test::Synthetic s = test::make_synthetic(test::SyntheticOptions{});
+  Report report;
+  s.maps.contribution[1].at(5, 5, 0) = NAN;
+  EXPECT_THROW(build_pack(s.scene, s.layout, s.maps, PackOptions{}, report), CookError);
+  s = test::make_synthetic(test::SyntheticOptions{});
+  s.maps.shadows[0].object = 7;
+  EXPECT_THROW(build_pack(s.scene, s.layout, s.maps, PackOptions{}, report), CookError);
+  s = test::make_synthetic(test::SyntheticOptions{});
+  s.maps.base = FloatImage(4, 4, 3);
+  EXPECT_THROW(build_pack(s.scene, s.layout, s.maps, PackOptions{}, report), CookError);
+  s = test::make_synthetic(test::SyntheticOptions{});
+  PackOptions bad;
+  bad.max_atlas_size = 100;
+  EXPECT_THROW(build_pack(s.scene, s.layout, s.maps, bad, report), CookError);
+}
+
+TEST(PackBuilder, LargePatchesAreTiledToTheMaximumAtlasSize) {
+  test::SyntheticOptions o;
+  o.width = 80;
+  o.height = 80;
+  test::Synthetic s = test::make_synthetic(o);
+  Report report;
+  PackOptions po;
+  po.max_atlas_size = 16;  // regions are 38 texels wide: base patches must be cut into tiles
+  const std::vector<uint8_t> bytes = build_pack(s.scene, s.layout, s.maps, po, report);
+  PackView v;
+  ASSERT_EQ(PackView::open(bytes.data(), bytes.size(), &v, nullptr), Status::kOk);
+  EXPECT_GT(v.atlas_count(), 1u);
+  for (uint32_t i = 0; i < v.atlas_count(); ++i) EXPECT_LE(v.atlas(i).width, 16u);
+  SceneState st;
+  CpuRecomposer r;
+  ASSERT_EQ(st.init(v, nullptr), Status::kOk);
+  ASSERT_EQ(r.init(v, nullptr), Status::kOk);
+  set_all(st, v, false, true);
+  r.rebuild(st);
+  std::vector<double> bound(size_t(80) * 80, 0.5 * s.maps.output_step);
+  add_patch_bounds(v, v.base_group(), bound);
+  expect_within(r, bound, [&](int x, int y, int c) { return s.maps.base.at(x, y, c); }, "tiled base");
+}
+
+}  // namespace
+}  // namespace lightpatch

@@ -1,0 +1,220 @@
+// The recomposition planner without GL: budgets, atomic changes, latency, changes during a
+// rebuild, and drift under half-float rounding (CpuMapSink rounds like an RGBA16F target).
+#include "lightpatch/planner.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+
+#include "runtime/map_reference.h"
+#include "runtime/synthetic_pack.h"
+
+namespace lightpatch {
+namespace {
+
+using testing::CpuMapSink;
+using testing::make_synthetic_pack;
+using testing::reference_map;
+using testing::SyntheticOptions;
+
+double max_abs_diff(const std::vector<float>& a, const std::vector<double>& b) {
+  double m = 0;
+  for (size_t i = 0; i < a.size(); ++i) m = std::max(m, std::fabs(double(a[i]) - b[i]));
+  return m;
+}
+
+struct Fixture {
+  explicit Fixture(const SyntheticOptions& o, bool half = false)
+      : bytes(make_synthetic_pack(o)) {
+    Error error;
+    EXPECT_TRUE(bytes.open(&pack, &error)) << error.message;
+    EXPECT_EQ(planner.init(pack, PlannerLimits(), &error), Status::kOk) << error.message;
+    sink = std::make_unique<CpuMapSink>(pack, half);
+  }
+  // Runs frames until idle; returns the frame count.
+  int settle(uint64_t budget, int max_frames = 10000) {
+    int frames = 0;
+    while (!planner.idle() && frames < max_frames) {
+      planner.update(budget, *sink);
+      ++frames;
+    }
+    return frames;
+  }
+  void random_change(std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    if (pack.object_count() > 0 && u(rng) < 0.4f) {
+      const uint32_t o = rng() % pack.object_count();
+      ASSERT_EQ(planner.set_object_visible(o, !planner.object_visible(o)), Status::kOk);
+    } else {
+      const uint32_t l = rng() % pack.light_count();
+      const float c[3] = {u(rng), u(rng), u(rng)};
+      ASSERT_EQ(planner.set_light(l, u(rng) < 0.8f, c, 4.0f * u(rng)), Status::kOk);
+    }
+  }
+  testing::SyntheticPack bytes;
+  PackView pack;
+  Planner planner;
+  std::unique_ptr<CpuMapSink> sink;
+};
+
+TEST(Planner, FirstBuildMatchesTheFormulaAndCostsWhatItSaid) {
+  Fixture f(SyntheticOptions{});
+  const uint64_t predicted = f.planner.rebuild_texels();
+  EXPECT_FALSE(f.planner.map_ready());
+  f.planner.update(~0ull >> 1, *f.sink);
+  EXPECT_TRUE(f.planner.map_ready());
+  EXPECT_TRUE(f.planner.idle());
+  EXPECT_EQ(f.sink->texels, predicted);
+  EXPECT_EQ(f.planner.stats().texels, predicted);
+  EXPECT_EQ(f.sink->presents, 1u);
+  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
+}
+
+TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
+  for (uint32_t seed = 1; seed <= 4; ++seed) {
+    SyntheticOptions o;
+    o.seed = seed;
+    Fixture f(o);
+    std::mt19937 rng(seed);
+    const uint64_t budgets[] = {50, 300, 1000, 5000};
+    for (int frame = 0; frame < 400; ++frame) {
+      if (rng() % 3 == 0) f.random_change(rng);
+      const uint64_t budget = budgets[rng() % 4];
+      const uint64_t before = f.sink->texels;
+      f.planner.update(budget, *f.sink);
+      const FrameStats& s = f.planner.stats();
+      ASSERT_EQ(f.sink->texels - before, s.texels);
+      if (s.oversize_steps == 0) {
+        ASSERT_LE(s.texels, budget) << "frame " << frame;
+      } else {
+        ASSERT_LE(s.draws, 1u) << "frame " << frame << " budget " << budget << " texels " << s.texels;  // an oversize step runs alone
+      }
+      if (f.planner.map_ready()) {
+        // The sampled map is exactly the presented state: never half of a change.
+        const auto ref = reference_map(f.pack, testing::shown_state(f.planner, f.pack));
+        ASSERT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3) << "seed " << seed << " frame " << frame;
+      }
+    }
+  }
+}
+
+TEST(Planner, SmallChangeIsIncrementalAndLandsInOneFrame) {
+  Fixture f(SyntheticOptions{});
+  f.settle(~0ull >> 1);
+  const uint32_t presents = f.sink->presents;
+  const float c[3] = {0.3f, 0.6f, 0.9f};
+  ASSERT_EQ(f.planner.set_light(1, true, c, 2.0f), Status::kOk);
+  const uint64_t cost = f.planner.light_change_texels(1);
+  ASSERT_LT(cost, f.planner.rebuild_texels());
+  f.planner.update(cost, *f.sink);  // exactly the change's cost fits
+  EXPECT_TRUE(f.planner.idle());
+  EXPECT_EQ(f.sink->presents, presents);  // no rebuild
+  EXPECT_EQ(f.planner.stats().texels, cost);
+  EXPECT_EQ(f.planner.stats().completed_changes, 1u);
+  EXPECT_EQ(f.planner.stats().max_latency_frames, 1u);
+  // One draw per group of the light (contribution + its visible shadow/pair groups).
+  uint32_t groups = 0;
+  for (uint32_t g = 0; g < f.pack.group_count(); ++g) groups += f.pack.group(g).light == 1;
+  EXPECT_EQ(f.planner.stats().draws, groups);  // every object is visible
+  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
+
+  // A light change and an object toggle in one frame whose budget is one texel short of both:
+  // the light lands, the toggle waits whole for the next frame.
+  const float c2[3] = {0.9f, 0.2f, 0.1f};
+  ASSERT_EQ(f.planner.set_light(0, true, c2, 1.5f), Status::kOk);
+  ASSERT_EQ(f.planner.set_object_visible(0, false), Status::kOk);
+  const uint64_t light_cost = f.planner.light_change_texels(0);
+  const uint64_t toggle = f.planner.object_change_texels(0);
+  ASSERT_GT(toggle, 0u);
+  f.planner.update(light_cost + toggle - 1, *f.sink);
+  EXPECT_EQ(f.planner.stats().texels, light_cost);
+  EXPECT_EQ(f.planner.stats().pending_changes, 1u);
+  EXPECT_EQ(f.planner.stats().oldest_pending_frames, 1u);
+  f.planner.update(toggle, *f.sink);
+  EXPECT_TRUE(f.planner.idle());
+  EXPECT_EQ(f.planner.stats().texels, toggle);
+  EXPECT_EQ(f.planner.stats().max_latency_frames, 2u);
+  EXPECT_EQ(f.sink->presents, presents);
+  const auto ref2 = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  EXPECT_LT(max_abs_diff(f.sink->sampled(), ref2), 1e-4);
+}
+
+TEST(Planner, ChangesDuringARebuildAreNotLostAndLatencyIsBounded) {
+  for (uint32_t seed = 1; seed <= 3; ++seed) {
+    SyntheticOptions o;
+    o.seed = seed;
+    Fixture f(o);
+    const uint64_t budget = 400;
+    std::mt19937 rng(seed);
+    // Mid first build: changes arrive every frame for a while.
+    uint32_t worst = 0;
+    for (int frame = 0; frame < 60; ++frame) {
+      if (frame < 20) f.random_change(rng);
+      f.planner.update(budget, *f.sink);
+      worst = std::max(worst, f.planner.stats().max_latency_frames);
+    }
+    f.settle(budget);
+    ASSERT_TRUE(f.planner.idle());
+    const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+    EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3);
+    // Bound: a change waits for at most the running rebuild and one more of its own.
+    const uint64_t rebuild = f.planner.rebuild_texels();
+    const uint32_t bound = uint32_t(2 * ((rebuild + budget - 1) / budget) + 3);
+    EXPECT_LE(worst, bound);
+  }
+}
+
+TEST(Planner, OversizeStepsRunAloneAndStillFinish) {
+  SyntheticOptions o;
+  o.max_patch = 12;
+  Fixture f(o);
+  const uint64_t budget = 20;  // smaller than many patches and than the clear
+  int frames = f.settle(budget);
+  EXPECT_TRUE(f.planner.idle());
+  EXPECT_GT(frames, 1);
+  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
+}
+
+TEST(Planner, NoDriftAfterTenThousandChangesOnAHalfFloatTarget) {
+  SyntheticOptions o;
+  o.seed = 7;
+  o.width = 24;
+  o.height = 20;
+  o.max_patch = 6;
+  Fixture f(o, /*half=*/true);
+  f.settle(~0ull >> 1);
+  std::mt19937 rng(99);
+  const uint32_t rebuilds_before = f.sink->presents;
+  for (int i = 0; i < 10000; ++i) {
+    f.random_change(rng);
+    f.planner.update(~0ull >> 1, *f.sink);
+    ASSERT_TRUE(f.planner.idle());
+  }
+  EXPECT_GT(f.sink->presents, rebuilds_before);  // the drift bound forced rebuilds
+  // Against the exact map: the incremental error bound plus one rebuild's rounding.
+  std::vector<double> magnitude;
+  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack), &magnitude);
+  const double bound = f.planner.stats().error_bound;
+  const auto& got = f.sink->sampled();
+  for (size_t i = 0; i < got.size(); ++i) {
+    const double rebuild_rounding = double(f.pack.group_count()) * magnitude[i] / 2048.0;
+    ASSERT_LE(std::fabs(got[i] - ref[i]), bound + rebuild_rounding + 1e-6) << "texel " << i / 3;
+  }
+}
+
+TEST(Planner, RejectsBadValues) {
+  Fixture f(SyntheticOptions{});
+  const float nan3[3] = {NAN, 0, 0}, neg[3] = {-1, 0, 0}, ok[3] = {1, 1, 1};
+  EXPECT_EQ(f.planner.set_light(0, true, nan3, 1), Status::kInvalidArgument);
+  EXPECT_EQ(f.planner.set_light(0, true, neg, 1), Status::kInvalidArgument);
+  EXPECT_EQ(f.planner.set_light(0, true, ok, INFINITY), Status::kInvalidArgument);
+  EXPECT_EQ(f.planner.set_light(99, true, ok, 1), Status::kInvalidArgument);
+  EXPECT_EQ(f.planner.set_object_visible(99, true), Status::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace lightpatch

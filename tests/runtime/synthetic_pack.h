@@ -1,0 +1,185 @@
+// Random but valid packs for runtime tests, written byte by byte per pack_format.h (no cooker
+// needed, so the runtime's tests also run cross-compiled). Deterministic for a seed.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "lightpatch/pack_format.h"
+#include "lightpatch/pack_view.h"
+
+namespace lightpatch::testing {
+
+struct SyntheticOptions {
+  uint32_t width = 48, height = 40;  // light map
+  uint32_t lights = 3, objects = 3;
+  uint32_t atlas_size = 64;
+  uint32_t max_patch = 10;         // patch side in texels
+  uint32_t patches_per_group = 4;  // up to
+  float shadow_probability = 0.6f;
+  float pair_probability = 0.4f;
+  float static_shadow_probability = 0.5f;  // an object shadowing the static lights
+  uint32_t seed = 1;
+};
+
+// Pack bytes in 8-byte aligned storage.
+struct SyntheticPack {
+  std::vector<uint64_t> storage;
+  uint64_t size = 0;
+  const void* data() const { return storage.data(); }
+  bool open(PackView* view, Error* error) const {
+    return PackView::open(storage.data(), size, view, error) == Status::kOk;
+  }
+};
+
+inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
+  using namespace pack;
+  std::mt19937 rng(o.seed);
+  auto uniform = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
+  auto integer = [&](uint32_t a, uint32_t b) {
+    return std::uniform_int_distribution<uint32_t>(a, b)(rng);
+  };
+  std::string strings;
+  std::vector<LightRecord> lights;
+  std::vector<ObjectRecord> objects;
+  for (uint32_t l = 0; l < o.lights; ++l) {
+    const std::string name = "light_" + std::to_string(l);
+    LightRecord r{};
+    r.name_offset = uint32_t(strings.size());
+    r.name_length = uint32_t(name.size());
+    strings += name;
+    for (float& c : r.color) c = uniform(0.2f, 1.0f);
+    r.intensity = uniform(0.5f, 4.0f);
+    r.type = kLightPoint;
+    lights.push_back(r);
+  }
+  for (uint32_t i = 0; i < o.objects; ++i) {
+    const std::string name = "object_" + std::to_string(i);
+    ObjectRecord r{};
+    r.name_offset = uint32_t(strings.size());
+    r.name_length = uint32_t(name.size());
+    strings += name;
+    objects.push_back(r);
+  }
+  // Groups in sorted order: base, contributions, shadows, pairs.
+  std::vector<GroupRecord> groups;
+  auto add_group = [&](uint16_t kind, uint16_t light, uint16_t a, uint16_t b) {
+    groups.push_back(GroupRecord{kind, light, a, b, 0, 0});
+  };
+  add_group(kGroupBase, kNone16, kNone16, kNone16);
+  for (uint32_t l = 0; l < o.lights; ++l) add_group(kGroupContribution, uint16_t(l), kNone16, kNone16);
+  for (uint32_t l = 0; l < o.lights; ++l) {
+    for (uint32_t a = 0; a < o.objects; ++a) {
+      if (uniform(0, 1) < o.shadow_probability) add_group(kGroupShadow, uint16_t(l), uint16_t(a), kNone16);
+    }
+  }
+  for (uint32_t l = 0; l < o.lights; ++l) {
+    for (uint32_t a = 0; a < o.objects; ++a) {
+      for (uint32_t b = a + 1; b < o.objects; ++b) {
+        if (uniform(0, 1) < o.pair_probability) {
+          add_group(kGroupPairCorrection, uint16_t(l), uint16_t(a), uint16_t(b));
+        }
+      }
+    }
+  }
+  for (uint32_t a = 0; a < o.objects; ++a) {
+    if (uniform(0, 1) < o.static_shadow_probability) add_group(kGroupStaticShadow, kNone16, uint16_t(a), kNone16);
+  }
+  // Patches, shelf-packed into as many atlases as needed (random bytes in all channels).
+  std::vector<PatchRecord> patches;
+  std::vector<std::vector<uint8_t>> atlases(1);
+  const uint32_t as = o.atlas_size;
+  uint32_t cx = 0, cy = 0, shelf = 0;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    groups[g].first_patch = uint32_t(patches.size());
+    const uint32_t n = integer(1, o.patches_per_group);
+    groups[g].patch_count = n;
+    for (uint32_t k = 0; k < n; ++k) {
+      PatchRecord p{};
+      p.width = uint16_t(integer(1, o.max_patch));
+      p.height = uint16_t(integer(1, o.max_patch));
+      if (cx + p.width > as) cx = 0, cy += shelf, shelf = 0;
+      if (cy + p.height > as) atlases.emplace_back(), cx = cy = shelf = 0;
+      p.atlas = uint8_t(atlases.size() - 1);
+      p.atlas_x = uint16_t(cx);
+      p.atlas_y = uint16_t(cy);
+      cx += p.width;
+      if (p.height > shelf) shelf = p.height;
+      p.dest_x = uint16_t(integer(0, o.width - p.width));
+      p.dest_y = uint16_t(integer(0, o.height - p.height));
+      p.channel_count = uniform(0, 1) < 0.3f ? 3 : 1;
+      p.channel = uint8_t(integer(0, p.channel_count == 3 ? 1 : 3));
+      p.encoding = uniform(0, 1) < 0.5f ? kEncodingSquare : kEncodingLinear;
+      p.scale = uniform(0.05f, groups[g].kind == kGroupBase ? 2.0f : 1.0f);
+      p.flags = (group_subtracts(groups[g].kind) && uniform(0, 1) < 0.2f) ? kFlagNegative : 0;
+      p.group = uint16_t(g);
+      patches.push_back(p);
+    }
+  }
+  for (auto& a : atlases) {
+    a.resize(size_t(as) * as * 4);
+    for (uint8_t& b : a) b = uint8_t(integer(0, 255));
+  }
+
+  // Layout: header, index, then 256-aligned sections.
+  const uint32_t section_count = 7;
+  auto align = [](uint64_t v) { return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment; };
+  uint64_t cursor = align(sizeof(Header) + section_count * sizeof(SectionEntry));
+  std::vector<SectionEntry> index;
+  auto place = [&](uint32_t type, uint64_t length) {
+    index.push_back(SectionEntry{type, 0, cursor, length});
+    cursor = align(cursor + length);
+    return index.back().offset;
+  };
+  const uint64_t lights_at = place(kSectionLights, lights.size() * sizeof(LightRecord));
+  const uint64_t objects_at = place(kSectionObjects, objects.size() * sizeof(ObjectRecord));
+  const uint64_t groups_at = place(kSectionGroups, groups.size() * sizeof(GroupRecord));
+  const uint64_t patches_at = place(kSectionPatches, patches.size() * sizeof(PatchRecord));
+  const uint64_t atlases_at = place(kSectionAtlases, atlases.size() * sizeof(AtlasRecord));
+  const uint64_t atlas_bytes = align(uint64_t(as) * as * 4);
+  const uint64_t data_at = place(kSectionAtlasData, atlas_bytes * atlases.size());
+  const uint64_t strings_at = place(kSectionStrings, strings.size());
+  std::vector<AtlasRecord> atlas_records;
+  for (size_t a = 0; a < atlases.size(); ++a) {
+    atlas_records.push_back(AtlasRecord{as, as, data_at + a * atlas_bytes});
+  }
+
+  SyntheticPack out;
+  out.size = cursor;
+  out.storage.assign((cursor + 7) / 8, 0);
+  uint8_t* b = reinterpret_cast<uint8_t*>(out.storage.data());
+  auto put = [&](uint64_t at, const void* src, size_t n) { if (n) std::memcpy(b + at, src, n); };
+  put(lights_at, lights.data(), lights.size() * sizeof(LightRecord));
+  put(objects_at, objects.data(), objects.size() * sizeof(ObjectRecord));
+  put(groups_at, groups.data(), groups.size() * sizeof(GroupRecord));
+  put(patches_at, patches.data(), patches.size() * sizeof(PatchRecord));
+  put(atlases_at, atlas_records.data(), atlas_records.size() * sizeof(AtlasRecord));
+  for (size_t a = 0; a < atlases.size(); ++a) put(data_at + a * atlas_bytes, atlases[a].data(), atlases[a].size());
+  put(strings_at, strings.data(), strings.size());
+  put(sizeof(Header), index.data(), index.size() * sizeof(SectionEntry));
+
+  Header h{};
+  h.magic = kMagic;
+  h.version = kVersion;
+  h.file_size = cursor;
+  h.section_count = section_count;
+  h.lightmap_width = o.width;
+  h.lightmap_height = o.height;
+  h.light_count = o.lights;
+  h.object_count = o.objects;
+  h.group_count = uint32_t(groups.size());
+  h.patch_count = uint32_t(patches.size());
+  h.atlas_count = uint32_t(atlases.size());
+  uint32_t crc = crc32(b + sizeof(Header), index.size() * sizeof(SectionEntry));
+  for (const SectionEntry& e : index) {
+    if (e.type != kSectionAtlasData) crc = crc32(b + e.offset, e.length, crc);
+  }
+  h.table_checksum = crc;
+  put(0, &h, sizeof h);
+  return out;
+}
+
+}  // namespace lightpatch::testing
