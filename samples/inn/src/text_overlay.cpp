@@ -103,6 +103,26 @@ void TextOverlay::draw(const char* text, int x, int y, float scale, int width, i
   }
   text_[n] = 0;
   if (n == 0) return;
+  // Word wrap in place: a space becomes a line break where the line would leave the viewport.
+  const int max_width = static_cast<int>(static_cast<float>(width - x - 8) / scale);
+  size_t line_start = 0, last_space = n;
+  for (size_t i = 0; i <= n; ++i) {
+    if (i < n && text_[i] == '\n') {
+      line_start = i + 1;
+      last_space = n;
+      continue;
+    }
+    if (i < n && text_[i] != ' ') continue;
+    const char saved = text_[i];
+    text_[i] = 0;
+    const int line_width = stb_easy_font_width(&text_[line_start]);
+    text_[i] = saved;
+    if (line_width > max_width && last_space < i) {
+      text_[last_space] = '\n';
+      line_start = last_space + 1;
+    }
+    last_space = i;
+  }
   int lines = 1;
   for (size_t i = 0; i < n; ++i) lines += text_[i] == '\n';
   const float w = static_cast<float>(stb_easy_font_width(text_.data()));
