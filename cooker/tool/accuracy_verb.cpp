@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "args.h"
+#include "gles_backend.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/import.h"
@@ -54,7 +55,8 @@ constexpr int kQuickLightmapSize = 32;
 constexpr double kMatterFraction = 0.01;
 
 struct AccuracyOptions {
-  std::string scene_path, csv_path, plot_path;
+  std::string scene_path, csv_path, plot_path, runtime_csv_path;
+  bool gles = false;
   int lightmap_size = 0;
   int reference_scale = 0;  // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
   bool quick = false;
@@ -422,12 +424,97 @@ std::string hex64(uint64_t v) {
   return buf;
 }
 
+// The authored state composed in float from the cook's unquantized maps, as the runtime's
+// equation does (DESIGN.md, The method in one screen): every light on at its authored colour and
+// intensity, every object visible. The runtime rows' reference: what a pack would give with no
+// 8-bit encoding and an exact target.
+std::vector<float> compose_authored_float(const Scene& scene, const BakedMaps& maps, int w, int h) {
+  const size_t n = size_t(w) * size_t(h);
+  std::vector<float> out(n * 3, 0.0f);
+  auto add = [&](const FloatImage& m, const glm::vec3& f) {
+    for (size_t i = 0; i < n; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        const float v = m.channels == 1 ? m.data[i] : m.data[i * 3 + size_t(c)];
+        out[i * 3 + size_t(c)] += f[c] * v;
+      }
+    }
+  };
+  add(maps.base, glm::vec3(1.0f));
+  for (const StaticShadowMap& s : maps.static_shadows) add(s.map, glm::vec3(-1.0f));
+  auto factor = [&](int light) {
+    const Light& l = scene.lights[size_t(maps.lights[size_t(light)])];
+    return l.color * l.intensity;
+  };
+  for (size_t l = 0; l < maps.contribution.size(); ++l) add(maps.contribution[l], factor(int(l)));
+  for (const ShadowMap& s : maps.shadows) add(s.map, -factor(s.light));
+  for (const PairCorrectionMap& p : maps.pair_corrections) add(p.map, factor(p.light));
+  return out;
+}
+
+// One runtime row: a pack's encoding and a light-map target, against the float composition.
+struct RuntimeRow {
+  std::string encoding, target;
+  double recompose_ms = -1.0;  // < 0: not measured
+  uint64_t atlas_bytes = 0, target_bytes = 0;
+  Metrics m;
+};
+
+uint64_t atlas_bytes_of(const std::vector<uint8_t>& pack) {
+  PackView view;
+  Error error;
+  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+    throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
+  }
+  uint64_t bytes = 0;
+  for (uint32_t i = 0; i < view.atlas_count(); ++i) {
+    bytes += uint64_t(view.atlas(i).width) * view.atlas(i).height * 4;
+  }
+  return bytes;
+}
+
+// Median wall time of `reps` full rebuilds of the authored state on the CPU reference (ms).
+double cpu_rebuild_ms(const std::vector<uint8_t>& pack, int reps) {
+  PackView view;
+  Error error;
+  SceneState state;
+  CpuRecomposer recomposer;
+  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk ||
+      state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
+    throw CookError(std::string("accuracy: recompose: ") + error.message);
+  }
+  std::vector<double> ms;
+  for (int r = 0; r < reps; ++r) {
+    const auto t = std::chrono::steady_clock::now();
+    if (recomposer.rebuild(state) != Status::kOk) throw CookError("accuracy: recompose failed");
+    ms.push_back(1000.0 * since(t));
+  }
+  std::nth_element(ms.begin(), ms.begin() + long(ms.size() / 2), ms.end());
+  return ms[ms.size() / 2];
+}
+
+std::string runtime_csv_text(const std::vector<RuntimeRow>& rows,
+                             const std::vector<std::string>& notes) {
+  std::string s;
+  for (const std::string& n : notes) s += "# " + n + "\n";
+  s += "encoding,target,recompose_ms,atlas_bytes,target_bytes,rel_rmse,max_rel_error,psnr_db\n";
+  for (const RuntimeRow& r : rows) {
+    s += r.encoding + "," + r.target + "," +
+         (r.recompose_ms >= 0.0 ? number(r.recompose_ms, "%.4f") : std::string("")) + "," +
+         std::to_string(r.atlas_bytes) + "," + std::to_string(r.target_bytes) + "," +
+         number(r.m.rel_rmse) + "," + number(r.m.max_rel_error) + "," +
+         number(r.m.psnr_db, "%.3f") + "\n";
+  }
+  return s;
+}
+
 }  // namespace
 
 int verb_accuracy(Args& args) {
   AccuracyOptions o;
   args.option("--csv", &o.csv_path);
   args.option("--plot", &o.plot_path);
+  args.option("--runtime-csv", &o.runtime_csv_path);
+  o.gles = args.flag("--gles");
   o.quick = args.flag("--quick");
   o.no_cache = args.flag("--no-cache");
   o.lightmap_size = args.int_option("--lightmap-size", 0, 8, 4096);
@@ -440,9 +527,15 @@ int verb_accuracy(Args& args) {
   if (o.csv_path.empty()) throw ArgsError("missing --csv OUT.csv");
   if (o.plot_path.empty()) throw ArgsError("missing --plot OUT.png");
   if (o.csv_path == o.plot_path) throw ArgsError("--csv and --plot name the same file");
+  if (!o.runtime_csv_path.empty() &&
+      (o.runtime_csv_path == o.csv_path || o.runtime_csv_path == o.plot_path)) {
+    throw ArgsError("--runtime-csv names the same file as --csv or --plot");
+  }
+  if (o.gles && o.runtime_csv_path.empty()) throw ArgsError("--gles needs --runtime-csv");
   if (o.lightmap_size == 0) o.lightmap_size = o.quick ? kQuickLightmapSize : kDefaultLightmapSize;
   probe_output_folder(o.csv_path);
   probe_output_folder(o.plot_path);
+  if (!o.runtime_csv_path.empty()) probe_output_folder(o.runtime_csv_path);
 
   const auto t_all = std::chrono::steady_clock::now();
   Progress progress(o.quiet);
@@ -632,6 +725,75 @@ int verb_accuracy(Args& args) {
   progress.end();
   mark_pareto(rows);
 
+  // The runtime: the encoding rows' bake packed with each encoding, recomposed on the CPU
+  // reference (float32 target) and, with --gles, by the GLES runtime (RGBA16F target), against
+  // the float composition of the same bake's unquantized maps.
+  std::vector<RuntimeRow> runtime_rows;
+  std::vector<std::string> runtime_notes;
+  if (!o.runtime_csv_path.empty()) {
+    const Baked* source = nullptr;
+    for (const Setting& st : sweep) {
+      if (st.knob != "encoding") continue;
+      for (const Baked& b : baked) {
+        if (same_bake(b.setting, st)) source = &b;
+      }
+    }
+    if (!source) throw CookError("accuracy: no bake for the runtime rows");
+    const int w = ref_layout.layout.width, h = ref_layout.layout.height;
+    FloatImage float_ref(w, h, 3);
+    float_ref.data = compose_authored_float(scene, source->maps, w, h);
+    const ReferenceStats fstats = reference_stats(float_ref, ref_layout.texels);
+    progress.begin("runtime", 3);
+    for (EncodingPolicy e :
+         {EncodingPolicy::kAuto, EncodingPolicy::kLinear, EncodingPolicy::kSquare}) {
+      Report report;
+      PackOptions pack_options;
+      pack_options.encoding = e;
+      const std::vector<uint8_t> pack =
+          build_pack(scene, ref_layout.layout, source->maps, pack_options, report);
+      RuntimeRow cpu;
+      cpu.encoding = encoding_name(e);
+      cpu.target = "cpu-float32";
+      cpu.atlas_bytes = atlas_bytes_of(pack);
+      cpu.target_bytes = uint64_t(w) * uint64_t(h) * 3 * 4;
+      cpu.m = compare(recompose_authored(pack), float_ref, fstats);
+      cpu.recompose_ms = cpu_rebuild_ms(pack, 5);
+      runtime_rows.push_back(cpu);
+      if (o.gles) {
+        PackView view;
+        Error error;
+        if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+          throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
+        }
+        std::vector<float> rgb;
+        recompose_gles(view, {}, &rgb);
+        if (rgb.size() != float_ref.data.size()) {
+          throw CookError("accuracy: the GLES backend returned a map of the wrong size");
+        }
+        RuntimeRow gpu = cpu;
+        gpu.target = "gles-rgba16f";
+        gpu.recompose_ms = -1.0;
+        gpu.target_bytes = uint64_t(w) * uint64_t(h) * 8 * 2;
+        gpu.m = compare(rgb, float_ref, fstats);
+        runtime_rows.push_back(gpu);
+      }
+      progress.advance();
+    }
+    progress.end();
+    runtime_notes = {
+        "lightpatch accuracy " + o.scene_path + ": the runtime",
+        "bake: " + source->setting.name + " at " + std::to_string(w) + "x" + std::to_string(h) +
+            "; reference: the authored state composed in float from the same bake's "
+            "unquantized maps (B - static shadows + sum f_l (C_l - S_ol + pair corrections))",
+        "errors as in the main CSV (valid texels; texels that matter: 1% of the 99th percentile "
+        "of the float composition's luminance)",
+        "recompose_ms: median of 5 full rebuilds of the authored state on the CPU reference; "
+        "the GLES time is not measured here (lightpatch bench PACK measures it)",
+        "atlas_bytes: the pack's RGBA8 atlases; target_bytes: cpu-float32 = the RGB float map, "
+        "gles-rgba16f = the light map and the intermediate texture, RGBA16F each",
+    };
+  }
+
   std::vector<std::string> notes = {
       "lightpatch accuracy " + o.scene_path + (o.quick ? " (--quick)" : ""),
       "reference: bake_state of the authored state, production x" + std::to_string(factor) + " (" +
@@ -677,6 +839,10 @@ int verb_accuracy(Args& args) {
   const std::vector<uint8_t> png = render_plot_png(plot);
   write_file_atomic(o.csv_path, csv.data(), csv.size());
   write_file_atomic(o.plot_path, png.data(), png.size());
+  if (!o.runtime_csv_path.empty()) {
+    const std::string text = runtime_csv_text(runtime_rows, runtime_notes);
+    write_file_atomic(o.runtime_csv_path, text.data(), text.size());
+  }
 
   if (!o.quiet) {
     std::printf("%-34s %9s %12s %10s %9s %9s %8s %s\n", "setting", "cook_s", "rays", "pack_bytes",
@@ -686,6 +852,18 @@ int verb_accuracy(Args& args) {
                   r.cook_s, static_cast<unsigned long long>(r.rays),
                   static_cast<unsigned long long>(r.pack_bytes), 100.0 * r.m.rel_rmse,
                   100.0 * r.m.max_rel_error, r.m.psnr_db, r.pareto ? "*" : "");
+    }
+    if (!runtime_rows.empty()) {
+      std::printf("\n%-8s %-14s %12s %12s %12s %9s %9s %8s\n", "encoding", "target", "recompose_ms",
+                  "atlas_bytes", "target_bytes", "rel_rmse", "max_rel", "psnr_db");
+      for (const RuntimeRow& r : runtime_rows) {
+        std::printf("%-8s %-14s %12s %12llu %12llu %8.4f%% %8.3f%% %8.2f\n", r.encoding.c_str(),
+                    r.target.c_str(),
+                    r.recompose_ms >= 0.0 ? number(r.recompose_ms, "%.3f").c_str() : "-",
+                    static_cast<unsigned long long>(r.atlas_bytes),
+                    static_cast<unsigned long long>(r.target_bytes), 100.0 * r.m.rel_rmse,
+                    100.0 * r.m.max_rel_error, r.m.psnr_db);
+      }
     }
   }
   progress.message("wrote " + o.csv_path + " and " + o.plot_path + " (" +

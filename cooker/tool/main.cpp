@@ -74,6 +74,13 @@ constexpr const char* kAccuracyHelp =
     "  --reference-scale K    the reference's photons, virtual lights and area samples are K\n"
     "                         times production's (1..16; default 4, 2 with --quick); its time\n"
     "                         and photon memory grow with K\n"
+    "  --runtime-csv OUT.csv  also the runtime: the encoding rows' bake packed with each\n"
+    "                         encoding (auto, linear, square) and recomposed on the CPU reference\n"
+    "                         (float32 target; median rebuild time), against the float "
+    "composition\n"
+    "                         of the same bake's unquantized maps; error, atlas and target bytes\n"
+    "  --gles                 with --runtime-csv: also the GLES runtime's RGBA16F target (EGL\n"
+    "                         surfaceless; its time is `lightpatch bench`'s)\n"
     "  --no-cache             bake the reference again (the cache file is rewritten)\n"
     "  --seed N               random seed of the sweep's bakes (the reference uses N + 7919)\n"
     "  --threads N            worker threads (default: all cores)\n"
@@ -107,9 +114,9 @@ const Verb kVerbs[] = {
      "floor measured in the same run, and lists the GPU memory it holds.\n\n"
      "options:\n  --json   machine-readable output\n"},
     {"accuracy", lightpatch::tool::verb_accuracy,
-     "accuracy SCENE --csv OUT.csv --plot OUT.png [--lightmap-size N] [--quick] [--reference-scale "
-     "K] [--no-cache] "
-     "[--seed N] [--threads N] [--quiet]",
+     "accuracy SCENE --csv OUT.csv --plot OUT.png [--runtime-csv OUT.csv [--gles]] "
+     "[--lightmap-size N] [--quick] [--reference-scale K] [--no-cache] [--seed N] [--threads N] "
+     "[--quiet]",
      kAccuracyHelp},
 };
 

@@ -1,6 +1,7 @@
 // `lightpatch accuracy` as a user runs it: a quick sweep of a small scene writes a CSV with one
 // row of finite measurements per setting and a PNG plot, production beats draft against the
-// reference, the reference is cached and reused, and bad options fail cleanly, writing nothing.
+// reference, the reference is cached and reused, the runtime CSV holds one row per encoding,
+// and bad options fail cleanly, writing nothing.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -82,9 +83,15 @@ std::string cache_file(const ScratchDir& dir) {
 TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
   ScratchDir dir;
   small_room().write(dir.file("room.glb"));
-  const std::vector<std::string> args = {
-      "accuracy", dir.file("room.glb"), "--quick", "--csv", dir.file("acc.csv"),
-      "--plot",   dir.file("acc.png")};
+  const std::vector<std::string> args = {"accuracy",
+                                         dir.file("room.glb"),
+                                         "--quick",
+                                         "--csv",
+                                         dir.file("acc.csv"),
+                                         "--plot",
+                                         dir.file("acc.png"),
+                                         "--runtime-csv",
+                                         dir.file("runtime.csv")};
   const ToolRun first = run_tool(args);
   ASSERT_EQ(first.code, 0) << describe(args, first);
   EXPECT_NE(first.err.find("reference: baking"), std::string::npos) << first.err;
@@ -134,6 +141,27 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
   EXPECT_EQ(h, 640);
   stbi_image_free(pixels);
 
+  // The runtime: each encoding on the CPU reference's float target, against the float
+  // composition of the same bake; only 8-bit quantization separates them.
+  const Csv runtime = read_csv(dir.file("runtime.csv"));
+  EXPECT_FALSE(runtime.notes.empty());
+  ASSERT_EQ(runtime.rows.size(), 3u);
+  std::vector<std::string> encodings;
+  for (const auto& row : runtime.rows) {
+    encodings.push_back(row.at("encoding"));
+    EXPECT_EQ(row.at("target"), "cpu-float32");
+    for (const char* key :
+         {"recompose_ms", "atlas_bytes", "target_bytes", "rel_rmse", "max_rel_error", "psnr_db"}) {
+      EXPECT_TRUE(std::isfinite(number(row, key))) << row.at("encoding") << " " << key;
+    }
+    EXPECT_GE(number(row, "recompose_ms"), 0.0);
+    EXPECT_GT(number(row, "atlas_bytes"), 0.0);
+    EXPECT_EQ(number(row, "target_bytes"), 32.0 * 32.0 * 3.0 * 4.0);
+    EXPECT_GT(number(row, "rel_rmse"), 0.0);
+    EXPECT_LT(number(row, "rel_rmse"), 0.02) << "more than 8-bit quantization error";
+  }
+  EXPECT_EQ(encodings, (std::vector<std::string>{"auto", "linear", "square"}));
+
   // Second run: the cached reference is used, not baked again.
   const ToolRun second = run_tool(args);
   ASSERT_EQ(second.code, 0) << describe(args, second);
@@ -169,6 +197,8 @@ TEST(Accuracy, BadOptionsFailWithAMessageAndWriteNothing) {
       {{"accuracy", scene, "--csv", csv, "--plot", png, "--bogus"}, "--bogus"},
       {{"accuracy", "--csv", csv, "--plot", png}, "SCENE"},
       {{"accuracy", scene, "--csv", csv, "--plot", csv}, "same file"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--runtime-csv", csv}, "same file"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--gles"}, "--runtime-csv"},
       {{"accuracy", dir.file("missing.glb"), "--csv", csv, "--plot", png, "--quick"},
        "missing.glb"},
       {{"accuracy", dir.file("broken.glb"), "--csv", csv, "--plot", png, "--quick"}, "broken.glb"},
