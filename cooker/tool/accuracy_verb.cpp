@@ -3,7 +3,9 @@
 // cooks the scene with each setting, recomposes the authored state from the pack on the CPU
 // reference and measures it against a reference bake of the same state (bake_state at several
 // times production's settings, cached on disk). Writes a CSV (one row per setting) and a PNG plot
-// of error against cook time with the Pareto front marked and the presets labelled.
+// of error against cook time with the Pareto front marked and the presets labelled. With
+// --runtime-csv, also the run-time side: one bake packed with each encoding and recomposed on
+// the CPU reference (and with --gles by the GLES runtime) against its float composition.
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -88,7 +90,6 @@ struct Row {
   int width = 0, height = 0;
   Metrics m;
   bool pareto = false;
-  bool reused_bake = false;
 };
 
 // A scene at one layout, ready to bake.
@@ -695,8 +696,6 @@ int verb_accuracy(Args& args) {
       fresh.rays = tracer->rays_traced() - rays0;
       fresh.setting = setting;
       reuse = &fresh;
-    } else {
-      row.reused_bake = true;
     }
     const auto t = std::chrono::steady_clock::now();
     Report report;
