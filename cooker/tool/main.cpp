@@ -48,6 +48,44 @@ constexpr const char* kBakeStateHelp =
     "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
     "                         authored, all on and visible)\n";
 
+constexpr const char* kAccuracyHelp =
+    "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
+    "time: the quality presets, then, around the preview preset, photons, virtual indirect\n"
+    "lights, area-light samples (when the scene has lights with a radius or emissive surfaces),\n"
+    "texel density (coarser pages) and the 8-bit encoding (linear, square; default auto). Each\n"
+    "setting is cooked (bake, finalize, pack), the authored state is recomposed from the pack on\n"
+    "the CPU reference and compared with a reference bake of the same state (bake-state at 4x\n"
+    "production's photons, virtual lights and area samples; 2x with --quick). The reference is\n"
+    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm, keyed by the scene, its\n"
+    "layout and the reference options, and reused by later runs.\n\n"
+    "Errors over the valid light-map texels: relative RMSE (sqrt(sum (x-r)^2 / sum r^2)), max\n"
+    "relative error over texels that matter (reference luminance >= 1% of its 99th percentile;\n"
+    "max_c |x_c-r_c| / max_c r_c) and PSNR (peak: 99th percentile of the reference). Density\n"
+    "rows are resampled to the reference's texels (nearest texel of the same surface).\n"
+    "The CSV has '#' note lines, a header and one row per setting; the table is also printed.\n\n"
+    "options:\n"
+    "  --csv OUT.csv          the measurements (written atomically)\n"
+    "  --plot OUT.png         relative RMSE against cook time, log-log, one colour per knob,\n"
+    "                         the Pareto front ringed and joined, the presets labelled\n"
+    "  --lightmap-size N      light-map page of the reference and of every row but the density\n"
+    "                         rows (8..4096; default 128, 32 with --quick)\n"
+    "  --quick                a short sweep for tests and CI: draft, production and draft's two\n"
+    "                         encodings at a 32x32 page\n"
+    "  --reference-scale K    the reference's photons, virtual lights and area samples are K\n"
+    "                         times production's (1..16; default 4, 2 with --quick); its time\n"
+    "                         and photon memory grow with K\n"
+    "  --runtime-csv OUT.csv  also the runtime: the encoding rows' bake packed with each\n"
+    "                         encoding (auto, linear, square) and recomposed on the CPU reference\n"
+    "                         (float32 target; median rebuild time), against the float "
+    "composition\n"
+    "                         of the same bake's unquantized maps; error, atlas and target bytes\n"
+    "  --gles                 with --runtime-csv: also the GLES runtime's RGBA16F target (EGL\n"
+    "                         surfaceless; its time is `lightpatch bench`'s)\n"
+    "  --no-cache             bake the reference again (the cache file is rewritten)\n"
+    "  --seed N               random seed of the sweep's bakes (the reference uses N + 7919)\n"
+    "  --threads N            worker threads (default: all cores)\n"
+    "  -q, --quiet            no progress on stderr, no table on stdout\n";
+
 const Verb kVerbs[] = {
     {"cook", lightpatch::tool::verb_cook,
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
@@ -75,6 +113,11 @@ const Verb kVerbs[] = {
      "Times the GLES recomposition of a pack (full rebuild, single changes) against a fill-rate\n"
      "floor measured in the same run, and lists the GPU memory it holds.\n\n"
      "options:\n  --json   machine-readable output\n"},
+    {"accuracy", lightpatch::tool::verb_accuracy,
+     "accuracy SCENE --csv OUT.csv --plot OUT.png [--runtime-csv OUT.csv [--gles]] "
+     "[--lightmap-size N] [--quick] [--reference-scale K] [--no-cache] [--seed N] [--threads N] "
+     "[--quiet]",
+     kAccuracyHelp},
 };
 
 void usage(FILE* out) {

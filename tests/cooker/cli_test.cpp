@@ -150,7 +150,8 @@ TEST(Cli, BadScenesAndOptionsLeaveTheOutputUntouched) {
 
 TEST(Cli, EveryVerbDocumentsItsOptions) {
   const ToolRun top = expect_success({"--help"});
-  for (const char* verb : {"cook", "bake-state", "info", "verify", "recompose", "bench"}) {
+  for (const char* verb :
+       {"cook", "bake-state", "info", "verify", "recompose", "bench", "accuracy"}) {
     SCOPED_TRACE(verb);
     EXPECT_NE(top.out.find(std::string("lightpatch ") + verb), std::string::npos) << top.out;
     const ToolRun help = expect_success({verb, "--help"});

@@ -1,0 +1,874 @@
+// The `accuracy` verb (DESIGN.md, "Accuracy has a price tag"): sweeps the cook's quality knobs
+// (presets, photons, virtual indirect lights, area-light samples, texel density, 8-bit encoding),
+// cooks the scene with each setting, recomposes the authored state from the pack on the CPU
+// reference and measures it against a reference bake of the same state (bake_state at several
+// times production's settings, cached on disk). Writes a CSV (one row per setting) and a PNG plot
+// of error against cook time with the Pareto front marked and the presets labelled. With
+// --runtime-csv, also the run-time side: one bake packed with each encoding and recomposed on
+// the CPU reference (and with --gles by the GLES runtime) against its float composition.
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "args.h"
+#include "gles_backend.h"
+#include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/import.h"
+#include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/pack_builder.h"
+#include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/report.h"
+#include "lightpatch/cooker/texel_builder.h"
+#include "lightpatch/cooker/tracer.h"
+#include "lightpatch/cooker/unwrap.h"
+#include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/pack_view.h"
+#include "lightpatch/scene_state.h"
+#include "plot_png.h"
+#include "verbs.h"
+
+namespace lightpatch::tool {
+
+namespace {
+
+using namespace lightpatch::cooker;
+
+// The reference: production's integrator with kReferenceFactor times its photons, virtual lights
+// and area samples (kQuickReferenceFactor with --quick; --reference-scale), and a seed of its own
+// so that its noise
+// is independent of the sweep's.
+constexpr int kReferenceFactor = 4;
+constexpr int kQuickReferenceFactor = 2;
+constexpr uint64_t kReferenceSeedOffset = 7919;
+constexpr int kDefaultLightmapSize = 128;
+constexpr int kQuickLightmapSize = 32;
+// Texels that matter (for the max error): reference luminance at least this fraction of the 99th
+// percentile of reference luminance over valid texels.
+constexpr double kMatterFraction = 0.01;
+
+struct AccuracyOptions {
+  std::string scene_path, csv_path, plot_path, runtime_csv_path;
+  bool gles = false;
+  int lightmap_size = 0;
+  int reference_scale = 0;  // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
+  bool quick = false;
+  bool no_cache = false;
+  int threads = 0;
+  uint64_t seed = 1;
+  bool quiet = false;
+};
+
+// One sweep point.
+struct Setting {
+  std::string name;  // unique, e.g. "preset=draft", "photons=30000"
+  std::string knob;  // the series it belongs to
+  BakeOptions bake;
+  EncodingPolicy encoding = EncodingPolicy::kAuto;
+  int lightmap_size = 0;  // the page; 0 = the reference's
+  bool label = false;     // a preset: labelled in the plot
+};
+
+struct Metrics {
+  double rel_rmse = 0.0, max_rel_error = 0.0, psnr_db = 0.0;
+};
+
+struct Row {
+  Setting setting;
+  double cook_s = 0.0;
+  uint64_t rays = 0;
+  uint64_t pack_bytes = 0;
+  int width = 0, height = 0;
+  Metrics m;
+  bool pareto = false;
+};
+
+// A scene at one layout, ready to bake.
+struct Prepared {
+  Layout layout;
+  TexelSet texels;
+};
+
+Prepared prepare_layout(const Scene& scene, const Tracer& tracer, int lightmap_size) {
+  Prepared p;
+  LayoutOptions lo;
+  lo.lightmap_size = lightmap_size;
+  p.layout = build_layout(scene, lo);
+  p.texels = build_texels(scene, p.layout, &tracer);
+  return p;
+}
+
+double since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// FNV-1a, 64 bits: the reference cache key.
+struct Hasher {
+  uint64_t h = 1469598103934665603ull;
+  void bytes(const void* data, size_t n) {
+    const uint8_t* p = static_cast<const uint8_t*>(data);
+    for (size_t i = 0; i < n; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ull;
+    }
+  }
+  template <typename T>
+  void value(const T& v) {
+    bytes(&v, sizeof(v));
+  }
+  void text(const std::string& s) {
+    value(s.size());
+    bytes(s.data(), s.size());
+  }
+};
+
+float luminance(const float* rgb) {
+  return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+}
+
+// What the comparisons need from the reference, computed once.
+struct ReferenceStats {
+  std::vector<uint32_t> valid;   // valid texel indices
+  std::vector<uint8_t> matters;  // per valid texel
+  double peak = 0.0;             // PSNR peak: 99th percentile of max-channel irradiance
+  double sum_sq = 0.0;           // sum of squared channel values over valid texels
+};
+
+double percentile99(std::vector<float> v) {
+  if (v.empty()) return 0.0;
+  const size_t k = std::min(v.size() - 1, size_t(std::floor(0.99 * double(v.size() - 1))));
+  std::nth_element(v.begin(), v.begin() + long(k), v.end());
+  return v[k];
+}
+
+ReferenceStats reference_stats(const FloatImage& ref, const TexelSet& texels) {
+  ReferenceStats s;
+  std::vector<float> lum, peak;
+  for (size_t i = 0; i < texels.valid.size(); ++i) {
+    if (!texels.valid[i]) continue;
+    const float* r = &ref.data[i * 3];
+    s.valid.push_back(uint32_t(i));
+    lum.push_back(luminance(r));
+    peak.push_back(std::max({r[0], r[1], r[2]}));
+    for (int c = 0; c < 3; ++c) s.sum_sq += double(r[c]) * r[c];
+  }
+  const double cut = kMatterFraction * percentile99(lum);
+  for (float l : lum) s.matters.push_back(l >= cut && l > 0.0f ? 1 : 0);
+  s.peak = percentile99(peak);
+  return s;
+}
+
+// `map`: RGB at the reference's layout.
+Metrics compare(const std::vector<float>& map, const FloatImage& ref, const ReferenceStats& s) {
+  Metrics m;
+  double sq = 0.0;
+  for (size_t k = 0; k < s.valid.size(); ++k) {
+    const size_t i = s.valid[k];
+    const float* r = &ref.data[i * 3];
+    const float* x = &map[i * 3];
+    double worst = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double d = double(x[c]) - double(r[c]);
+      sq += d * d;
+      worst = std::max(worst, std::abs(d));
+    }
+    if (s.matters[k]) {
+      const double denom = std::max({r[0], r[1], r[2]});
+      m.max_rel_error = std::max(m.max_rel_error, worst / denom);
+    }
+  }
+  m.rel_rmse = s.sum_sq > 0.0 ? std::sqrt(sq / s.sum_sq) : 0.0;
+  const double n = 3.0 * double(std::max<size_t>(1, s.valid.size()));
+  const double mse = sq / n;
+  m.psnr_db = mse > 0.0 ? 10.0 * std::log10(s.peak * s.peak / mse) : HUGE_VAL;
+  return m;
+}
+
+// The authored state recomposed from pack bytes on the CPU reference.
+std::vector<float> recompose_authored(const std::vector<uint8_t>& pack) {
+  PackView view;
+  Error error;
+  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+    throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
+  }
+  SceneState state;
+  CpuRecomposer recomposer;
+  if (state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
+    throw CookError(std::string("accuracy: recompose: ") + error.message);
+  }
+  if (recomposer.rebuild(state) != Status::kOk) throw CookError("accuracy: recompose failed");
+  const size_t n = size_t(recomposer.width()) * recomposer.height() * 3;
+  return std::vector<float>(recomposer.rgb(), recomposer.rgb() + n);
+}
+
+// Resamples a map of another layout of the same scene to the reference layout: each valid
+// reference texel takes the value of the nearest valid texel (by world position) of the same mesh
+// whose normal is within 60 degrees. Nearest, not bilinear: this overstates a coarse map's error a
+// little next to what a renderer's filtering shows.
+std::vector<float> resample_to(const std::vector<float>& map, const TexelSet& from,
+                               const TexelSet& to, float cell) {
+  struct Key {
+    int64_t x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return size_t(k.x * 73856093 ^ k.y * 19349663 ^ k.z * 83492791);
+    }
+  };
+  auto key_of = [cell](const glm::vec3& p) {
+    return Key{int64_t(std::floor(p.x / cell)), int64_t(std::floor(p.y / cell)),
+               int64_t(std::floor(p.z / cell))};
+  };
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> grid;
+  for (size_t i = 0; i < from.valid.size(); ++i) {
+    if (from.valid[i]) grid[key_of(from.position[i])].push_back(uint32_t(i));
+  }
+  std::vector<float> out(to.valid.size() * 3, 0.0f);
+  for (size_t i = 0; i < to.valid.size(); ++i) {
+    if (!to.valid[i]) continue;
+    const glm::vec3 p = to.position[i];
+    const Key k = key_of(p);
+    int64_t best = -1;
+    float best_d = HUGE_VALF;
+    for (int reach = 1; reach <= 8 && best < 0; reach *= 2) {
+      for (int64_t dz = -reach; dz <= reach; ++dz) {
+        for (int64_t dy = -reach; dy <= reach; ++dy) {
+          for (int64_t dx = -reach; dx <= reach; ++dx) {
+            const auto it = grid.find(Key{k.x + dx, k.y + dy, k.z + dz});
+            if (it == grid.end()) continue;
+            for (uint32_t j : it->second) {
+              if (from.mesh[j] != to.mesh[i]) continue;
+              if (glm::dot(from.normal[j], to.normal[i]) < 0.5f) continue;
+              const glm::vec3 d = from.position[j] - p;
+              const float d2 = glm::dot(d, d);
+              if (d2 < best_d) {
+                best_d = d2;
+                best = j;
+              }
+            }
+          }
+        }
+      }
+    }
+    if (best < 0) continue;  // no counterpart: stays 0 and counts as error
+    for (int c = 0; c < 3; ++c) out[i * 3 + size_t(c)] = map[size_t(best) * 3 + size_t(c)];
+  }
+  return out;
+}
+
+std::vector<Setting> make_sweep(const AccuracyOptions& o, bool has_area_lights, int base_size) {
+  std::vector<Setting> s;
+  BakeOptions base;
+  base.seed = o.seed;
+  base.threads = o.threads;
+  auto preset = [&](Quality q) {
+    Setting x;
+    x.name = std::string("preset=") + quality_name(q);
+    x.knob = "preset";
+    x.bake = base;
+    x.bake.quality = q;
+    x.label = true;
+    return x;
+  };
+  auto encoding = [&](Quality q, EncodingPolicy e) {
+    Setting x = preset(q);
+    x.name = std::string("encoding=") + (e == EncodingPolicy::kLinear ? "linear" : "square") +
+             " (" + quality_name(q) + ")";
+    x.knob = "encoding";
+    x.encoding = e;
+    x.label = false;
+    return x;
+  };
+  if (o.quick) {
+    s.push_back(preset(Quality::kDraft));
+    s.push_back(preset(Quality::kProduction));
+    s.push_back(encoding(Quality::kDraft, EncodingPolicy::kLinear));
+    s.push_back(encoding(Quality::kDraft, EncodingPolicy::kSquare));
+    return s;
+  }
+  for (Quality q : {Quality::kDraft, Quality::kPreview, Quality::kProduction}) {
+    s.push_back(preset(q));
+  }
+  // Each knob swept around the preview preset, the others at preview's values.
+  for (int n : {10000, 30000, 60000, 250000, 500000}) {
+    Setting x = preset(Quality::kPreview);
+    x.name = "photons=" + std::to_string(n);
+    x.knob = "photons";
+    x.label = false;
+    x.bake.photons = n;
+    s.push_back(x);
+  }
+  for (int n : {64, 192, 1024, 2048, 4096}) {
+    Setting x = preset(Quality::kPreview);
+    x.name = "virtual_lights=" + std::to_string(n);
+    x.knob = "virtual lights";
+    x.label = false;
+    x.bake.virtual_lights = n;
+    s.push_back(x);
+  }
+  if (has_area_lights) {
+    for (int n : {1, 4, 32, 64}) {
+      Setting x = preset(Quality::kPreview);
+      x.name = "area_samples=" + std::to_string(n);
+      x.knob = "area samples";
+      x.label = false;
+      x.bake.area_samples = n;
+      s.push_back(x);
+    }
+  }
+  for (int size : {base_size / 4, base_size / 2}) {
+    if (size < 8) continue;
+    Setting x = preset(Quality::kPreview);
+    x.name = "lightmap_size=" + std::to_string(size);
+    x.knob = "texel density";
+    x.label = false;
+    x.lightmap_size = size;
+    s.push_back(x);
+  }
+  for (EncodingPolicy e : {EncodingPolicy::kLinear, EncodingPolicy::kSquare}) {
+    s.push_back(encoding(Quality::kPreview, e));
+  }
+  return s;
+}
+
+const char* encoding_name(EncodingPolicy e) {
+  switch (e) {
+    case EncodingPolicy::kAuto:
+      return "auto";
+    case EncodingPolicy::kLinear:
+      return "linear";
+    case EncodingPolicy::kSquare:
+      return "square";
+  }
+  return "auto";
+}
+
+bool same_bake(const Setting& a, const Setting& b) {
+  return a.lightmap_size == b.lightmap_size && a.bake.quality == b.bake.quality &&
+         a.bake.photons == b.bake.photons && a.bake.virtual_lights == b.bake.virtual_lights &&
+         a.bake.area_samples == b.bake.area_samples && a.bake.seed == b.bake.seed &&
+         a.bake.indirect == b.bake.indirect && a.bake.area_bias == b.bake.area_bias;
+}
+
+void mark_pareto(std::vector<Row>& rows) {
+  for (Row& r : rows) {
+    r.pareto = true;
+    for (const Row& o : rows) {
+      if (&o == &r) continue;
+      const bool no_worse = o.cook_s <= r.cook_s && o.m.rel_rmse <= r.m.rel_rmse;
+      const bool better = o.cook_s < r.cook_s || o.m.rel_rmse < r.m.rel_rmse;
+      if (no_worse && better) {
+        r.pareto = false;
+        break;
+      }
+    }
+  }
+}
+
+std::string number(double v, const char* format = "%.6g") {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), format, v);
+  return buf;
+}
+
+std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string>& notes) {
+  std::string s;
+  for (const std::string& n : notes) s += "# " + n + "\n";
+  s += "setting,knob,quality,photons,virtual_lights,area_samples,lightmap_size,encoding,cook_s,"
+       "rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto\n";
+  for (const Row& r : rows) {
+    const BakeOptions& b = r.setting.bake;
+    const IndirectPreset ip = indirect_preset(b);
+    const int samples = b.area_samples > 0               ? b.area_samples
+                        : b.quality == Quality::kDraft   ? 4
+                        : b.quality == Quality::kPreview ? 16
+                                                         : 64;
+    s += "\"" + r.setting.name + "\"," + r.setting.knob + "," + quality_name(b.quality) + "," +
+         std::to_string(ip.photons) + "," + std::to_string(ip.virtual_lights) + "," +
+         std::to_string(samples) + "," + std::to_string(r.width) + "," +
+         encoding_name(r.setting.encoding) + "," + number(r.cook_s, "%.4f") + "," +
+         std::to_string(r.rays) + "," + std::to_string(r.pack_bytes) + "," + number(r.m.rel_rmse) +
+         "," + number(r.m.max_rel_error) + "," + number(r.m.psnr_db, "%.3f") + "," +
+         (r.pareto ? "1" : "0") + "\n";
+  }
+  return s;
+}
+
+std::string folder_of(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+}
+
+void probe_output_folder(const std::string& path) {
+  const std::string dir = folder_of(path);
+  std::string probe = dir + "/.lightpatch-probe.XXXXXX";
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) throw CookError("cannot write into '" + dir + "' (for '" + path + "')");
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
+std::string hex64(uint64_t v) {
+  char buf[17];
+  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+// The authored state composed in float from the cook's unquantized maps, as the runtime's
+// equation does (DESIGN.md, The method in one screen): every light on at its authored colour and
+// intensity, every object visible. The runtime rows' reference: what a pack would give with no
+// 8-bit encoding and an exact target.
+std::vector<float> compose_authored_float(const Scene& scene, const BakedMaps& maps, int w, int h) {
+  const size_t n = size_t(w) * size_t(h);
+  std::vector<float> out(n * 3, 0.0f);
+  auto add = [&](const FloatImage& m, const glm::vec3& f) {
+    for (size_t i = 0; i < n; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        const float v = m.channels == 1 ? m.data[i] : m.data[i * 3 + size_t(c)];
+        out[i * 3 + size_t(c)] += f[c] * v;
+      }
+    }
+  };
+  add(maps.base, glm::vec3(1.0f));
+  for (const StaticShadowMap& s : maps.static_shadows) add(s.map, glm::vec3(-1.0f));
+  auto factor = [&](int light) {
+    const Light& l = scene.lights[size_t(maps.lights[size_t(light)])];
+    return l.color * l.intensity;
+  };
+  for (size_t l = 0; l < maps.contribution.size(); ++l) add(maps.contribution[l], factor(int(l)));
+  for (const ShadowMap& s : maps.shadows) add(s.map, -factor(s.light));
+  for (const PairCorrectionMap& p : maps.pair_corrections) add(p.map, factor(p.light));
+  return out;
+}
+
+// One runtime row: a pack's encoding and a light-map target, against the float composition.
+struct RuntimeRow {
+  std::string encoding, target;
+  double recompose_ms = -1.0;  // < 0: not measured
+  uint64_t atlas_bytes = 0, target_bytes = 0;
+  Metrics m;
+};
+
+uint64_t atlas_bytes_of(const std::vector<uint8_t>& pack) {
+  PackView view;
+  Error error;
+  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+    throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
+  }
+  uint64_t bytes = 0;
+  for (uint32_t i = 0; i < view.atlas_count(); ++i) {
+    bytes += uint64_t(view.atlas(i).width) * view.atlas(i).height * 4;
+  }
+  return bytes;
+}
+
+// Median wall time of `reps` full rebuilds of the authored state on the CPU reference (ms).
+double cpu_rebuild_ms(const std::vector<uint8_t>& pack, int reps) {
+  PackView view;
+  Error error;
+  SceneState state;
+  CpuRecomposer recomposer;
+  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk ||
+      state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
+    throw CookError(std::string("accuracy: recompose: ") + error.message);
+  }
+  std::vector<double> ms;
+  for (int r = 0; r < reps; ++r) {
+    const auto t = std::chrono::steady_clock::now();
+    if (recomposer.rebuild(state) != Status::kOk) throw CookError("accuracy: recompose failed");
+    ms.push_back(1000.0 * since(t));
+  }
+  std::nth_element(ms.begin(), ms.begin() + long(ms.size() / 2), ms.end());
+  return ms[ms.size() / 2];
+}
+
+std::string runtime_csv_text(const std::vector<RuntimeRow>& rows,
+                             const std::vector<std::string>& notes) {
+  std::string s;
+  for (const std::string& n : notes) s += "# " + n + "\n";
+  s += "encoding,target,recompose_ms,atlas_bytes,target_bytes,rel_rmse,max_rel_error,psnr_db\n";
+  for (const RuntimeRow& r : rows) {
+    s += r.encoding + "," + r.target + "," +
+         (r.recompose_ms >= 0.0 ? number(r.recompose_ms, "%.4f") : std::string("")) + "," +
+         std::to_string(r.atlas_bytes) + "," + std::to_string(r.target_bytes) + "," +
+         number(r.m.rel_rmse) + "," + number(r.m.max_rel_error) + "," +
+         number(r.m.psnr_db, "%.3f") + "\n";
+  }
+  return s;
+}
+
+}  // namespace
+
+int verb_accuracy(Args& args) {
+  AccuracyOptions o;
+  args.option("--csv", &o.csv_path);
+  args.option("--plot", &o.plot_path);
+  args.option("--runtime-csv", &o.runtime_csv_path);
+  o.gles = args.flag("--gles");
+  o.quick = args.flag("--quick");
+  o.no_cache = args.flag("--no-cache");
+  o.lightmap_size = args.int_option("--lightmap-size", 0, 8, 4096);
+  o.reference_scale = args.int_option("--reference-scale", 0, 1, 16);
+  o.threads = args.int_option("--threads", 0, 1, 1024);
+  o.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
+  o.quiet = args.flag("--quiet", "-q");
+  o.scene_path = args.positional("SCENE");
+  args.finish();
+  if (o.csv_path.empty()) throw ArgsError("missing --csv OUT.csv");
+  if (o.plot_path.empty()) throw ArgsError("missing --plot OUT.png");
+  if (o.csv_path == o.plot_path) throw ArgsError("--csv and --plot name the same file");
+  if (!o.runtime_csv_path.empty() &&
+      (o.runtime_csv_path == o.csv_path || o.runtime_csv_path == o.plot_path)) {
+    throw ArgsError("--runtime-csv names the same file as --csv or --plot");
+  }
+  if (o.gles && o.runtime_csv_path.empty()) throw ArgsError("--gles needs --runtime-csv");
+  if (o.lightmap_size == 0) o.lightmap_size = o.quick ? kQuickLightmapSize : kDefaultLightmapSize;
+  probe_output_folder(o.csv_path);
+  probe_output_folder(o.plot_path);
+  if (!o.runtime_csv_path.empty()) probe_output_folder(o.runtime_csv_path);
+
+  const auto t_all = std::chrono::steady_clock::now();
+  Progress progress(o.quiet);
+  Progress silent(true);
+  Report scratch;
+
+  progress.begin("import", 1);
+  const Scene scene = import_gltf(o.scene_path);
+  progress.end();
+  progress.begin("trace setup", 1);
+  const std::unique_ptr<Tracer> tracer = make_embree_tracer(scene);
+  progress.end();
+  progress.begin("layout and texels", 1);
+  const Prepared ref_layout = prepare_layout(scene, *tracer, o.lightmap_size);
+  progress.end();
+  for (const std::string& note : ref_layout.layout.notes) progress.message("note: " + note);
+
+  // The reference: cached next to the CSV, keyed by the scene file, the imported scene's texels
+  // and lights, the layout and the reference's options.
+  BakeOptions ref_options;
+  const int factor = o.reference_scale > 0 ? o.reference_scale
+                     : o.quick             ? kQuickReferenceFactor
+                                           : kReferenceFactor;
+  {
+    BakeOptions prod;
+    prod.quality = Quality::kProduction;
+    const IndirectPreset p = indirect_preset(prod);
+    ref_options.quality = Quality::kProduction;
+    ref_options.photons = p.photons * factor;
+    ref_options.virtual_lights = p.virtual_lights * factor;
+    ref_options.area_samples = 64 * factor;
+    ref_options.seed = o.seed + kReferenceSeedOffset;
+    ref_options.threads = o.threads;
+  }
+  Hasher hasher;
+  hasher.text("lightpatch accuracy reference v1");
+  {
+    const std::vector<uint8_t> file = read_file(o.scene_path);
+    hasher.bytes(file.data(), file.size());
+    const TexelSet& t = ref_layout.texels;
+    hasher.value(t.width);
+    hasher.value(t.height);
+    hasher.bytes(t.position.data(), t.position.size() * sizeof(glm::vec3));
+    hasher.bytes(t.normal.data(), t.normal.size() * sizeof(glm::vec3));
+    hasher.bytes(t.albedo.data(), t.albedo.size() * sizeof(glm::vec3));
+    hasher.bytes(t.valid.data(), t.valid.size());
+    for (const Light& l : scene.lights) {
+      hasher.text(l.name);
+      hasher.value(l.type);
+      hasher.value(l.position);
+      hasher.value(l.direction);
+      hasher.value(l.color);
+      hasher.value(l.intensity);
+      hasher.value(l.range);
+      hasher.value(l.inner_cone);
+      hasher.value(l.outer_cone);
+      hasher.value(l.radius);
+      hasher.value(l.semi_dynamic);
+    }
+    hasher.value(ref_options.quality);
+    hasher.value(ref_options.photons);
+    hasher.value(ref_options.virtual_lights);
+    hasher.value(ref_options.area_samples);
+    hasher.value(ref_options.seed);
+  }
+  const std::string cache_path =
+      folder_of(o.csv_path) + "/lightpatch-accuracy-reference-" + hex64(hasher.h) + ".pfm";
+  FloatImage reference;
+  bool cached = false;
+  if (!o.no_cache && std::filesystem::exists(cache_path)) {
+    try {
+      reference = read_pfm(cache_path);
+      cached = reference.width == ref_layout.layout.width &&
+               reference.height == ref_layout.layout.height && reference.channels == 3;
+    } catch (const CookError& e) {
+      progress.message(std::string("note: reference cache unreadable, baking again: ") + e.what());
+    }
+  }
+  double ref_seconds = 0.0;
+  if (cached) {
+    progress.message("reference: using the cache " + cache_path);
+  } else {
+    progress.message("reference: baking (production x" + std::to_string(factor) + ": " +
+                     std::to_string(ref_options.photons) + " photons, " +
+                     std::to_string(ref_options.virtual_lights) + " virtual lights, " +
+                     std::to_string(ref_options.area_samples) + " area samples)");
+    const auto t = std::chrono::steady_clock::now();
+    reference = bake_state(scene, ref_layout.layout, ref_layout.texels, *tracer, StateSpec{},
+                           ref_options, progress, scratch);
+    finalize_map(reference, scene, ref_layout.layout, ref_layout.texels);
+    ref_seconds = since(t);
+    write_pfm(cache_path, reference);
+    progress.message("reference: baked in " + number(ref_seconds, "%.2f") + " s, cached in " +
+                     cache_path);
+  }
+  for (float v : reference.data) {
+    if (!std::isfinite(v)) throw CookError("accuracy: the reference map has a non-finite texel");
+  }
+  const ReferenceStats stats = reference_stats(reference, ref_layout.texels);
+  if (stats.valid.empty()) throw CookError("accuracy: the scene has no light-map texels");
+  if (!(stats.peak > 0.0)) throw CookError("accuracy: the scene is unlit (the reference is black)");
+
+  bool has_area = false;
+  for (const Light& l : scene.lights) {
+    has_area = has_area || (l.radius > 0.0f && l.type != LightType::kDirectional);
+  }
+  for (const Material& m : scene.materials) {
+    has_area = has_area || m.emissive != glm::vec3(0.0f);
+  }
+  const std::vector<Setting> sweep = make_sweep(o, has_area, o.lightmap_size);
+
+  std::vector<Row> rows;
+  std::vector<std::string> skipped;  // settings the scene cannot take (a page too small)
+  struct Baked {
+    Setting setting;
+    BakedMaps maps;
+    double seconds = 0.0;
+    uint64_t rays = 0;
+  };
+  std::vector<Baked> baked;  // bakes reused by settings that differ only in encoding
+  progress.begin("sweep", sweep.size());
+  for (const Setting& setting : sweep) {
+    Row row;
+    row.setting = setting;
+    const Prepared* prepared = &ref_layout;
+    Prepared other;
+    if (setting.lightmap_size > 0 && setting.lightmap_size != o.lightmap_size) {
+      try {
+        other = prepare_layout(scene, *tracer, setting.lightmap_size);
+      } catch (const CookError& e) {
+        skipped.push_back(setting.name + " skipped: " + e.what());
+        progress.message("note: " + skipped.back());
+        progress.advance();
+        continue;
+      }
+      prepared = &other;
+    }
+    const Baked* reuse = nullptr;
+    for (const Baked& b : baked) {
+      if (same_bake(b.setting, setting)) reuse = &b;
+    }
+    Baked fresh;
+    if (!reuse) {
+      const uint64_t rays0 = tracer->rays_traced();
+      const auto t = std::chrono::steady_clock::now();
+      Report report;
+      fresh.maps = bake_maps(scene, prepared->layout, prepared->texels, *tracer, setting.bake,
+                             silent, report);
+      finalize_map(fresh.maps.base, scene, prepared->layout, prepared->texels);
+      for (FloatImage& c : fresh.maps.contribution) {
+        finalize_map(c, scene, prepared->layout, prepared->texels);
+      }
+      for (ShadowMap& s : fresh.maps.shadows) {
+        finalize_map(s.map, scene, prepared->layout, prepared->texels);
+      }
+      fresh.seconds = since(t);
+      fresh.rays = tracer->rays_traced() - rays0;
+      fresh.setting = setting;
+      reuse = &fresh;
+    }
+    const auto t = std::chrono::steady_clock::now();
+    Report report;
+    PackOptions pack_options;
+    pack_options.encoding = setting.encoding;
+    const std::vector<uint8_t> pack =
+        build_pack(scene, prepared->layout, reuse->maps, pack_options, report);
+    row.cook_s = reuse->seconds + since(t);
+    row.rays = reuse->rays;
+    row.pack_bytes = pack.size();
+    row.width = prepared->layout.width;
+    row.height = prepared->layout.height;
+    std::vector<float> map = recompose_authored(pack);
+    if (prepared != &ref_layout) {
+      const float cell = 2.0f / std::max(1e-6f, prepared->layout.texels_per_unit);
+      map = resample_to(map, prepared->texels, ref_layout.texels, cell);
+    }
+    for (float v : map) {
+      if (!std::isfinite(v)) throw CookError("accuracy: " + setting.name + ": non-finite texel");
+    }
+    row.m = compare(map, reference, stats);
+    rows.push_back(row);
+    if (reuse == &fresh && setting.lightmap_size == 0) baked.push_back(std::move(fresh));
+    progress.advance();
+  }
+  progress.end();
+  mark_pareto(rows);
+
+  // The runtime: the encoding rows' bake packed with each encoding, recomposed on the CPU
+  // reference (float32 target) and, with --gles, by the GLES runtime (RGBA16F target), against
+  // the float composition of the same bake's unquantized maps.
+  std::vector<RuntimeRow> runtime_rows;
+  std::vector<std::string> runtime_notes;
+  if (!o.runtime_csv_path.empty()) {
+    const Baked* source = nullptr;
+    for (const Setting& st : sweep) {
+      if (st.knob != "encoding") continue;
+      for (const Baked& b : baked) {
+        if (same_bake(b.setting, st)) source = &b;
+      }
+    }
+    if (!source) throw CookError("accuracy: no bake for the runtime rows");
+    const int w = ref_layout.layout.width, h = ref_layout.layout.height;
+    FloatImage float_ref(w, h, 3);
+    float_ref.data = compose_authored_float(scene, source->maps, w, h);
+    const ReferenceStats fstats = reference_stats(float_ref, ref_layout.texels);
+    progress.begin("runtime", 3);
+    for (EncodingPolicy e :
+         {EncodingPolicy::kAuto, EncodingPolicy::kLinear, EncodingPolicy::kSquare}) {
+      Report report;
+      PackOptions pack_options;
+      pack_options.encoding = e;
+      const std::vector<uint8_t> pack =
+          build_pack(scene, ref_layout.layout, source->maps, pack_options, report);
+      RuntimeRow cpu;
+      cpu.encoding = encoding_name(e);
+      cpu.target = "cpu-float32";
+      cpu.atlas_bytes = atlas_bytes_of(pack);
+      cpu.target_bytes = uint64_t(w) * uint64_t(h) * 3 * 4;
+      cpu.m = compare(recompose_authored(pack), float_ref, fstats);
+      cpu.recompose_ms = cpu_rebuild_ms(pack, 5);
+      runtime_rows.push_back(cpu);
+      if (o.gles) {
+        PackView view;
+        Error error;
+        if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+          throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
+        }
+        std::vector<float> rgb;
+        recompose_gles(view, {}, &rgb);
+        if (rgb.size() != float_ref.data.size()) {
+          throw CookError("accuracy: the GLES backend returned a map of the wrong size");
+        }
+        RuntimeRow gpu = cpu;
+        gpu.target = "gles-rgba16f";
+        gpu.recompose_ms = -1.0;
+        gpu.target_bytes = uint64_t(w) * uint64_t(h) * 8 * 2;
+        gpu.m = compare(rgb, float_ref, fstats);
+        runtime_rows.push_back(gpu);
+      }
+      progress.advance();
+    }
+    progress.end();
+    runtime_notes = {
+        "lightpatch accuracy " + o.scene_path + ": the runtime",
+        "bake: " + source->setting.name + " at " + std::to_string(w) + "x" + std::to_string(h) +
+            "; reference: the authored state composed in float from the same bake's "
+            "unquantized maps (B - static shadows + sum f_l (C_l - S_ol + pair corrections))",
+        "errors as in the main CSV (valid texels; texels that matter: 1% of the 99th percentile "
+        "of the float composition's luminance)",
+        "recompose_ms: median of 5 full rebuilds of the authored state on the CPU reference; "
+        "the GLES time is not measured here (lightpatch bench PACK measures it)",
+        "atlas_bytes: the pack's RGBA8 atlases; target_bytes: cpu-float32 = the RGB float map, "
+        "gles-rgba16f = the light map and the intermediate texture, RGBA16F each",
+    };
+  }
+
+  std::vector<std::string> notes = {
+      "lightpatch accuracy " + o.scene_path + (o.quick ? " (--quick)" : ""),
+      "reference: bake_state of the authored state, production x" + std::to_string(factor) + " (" +
+          std::to_string(ref_options.photons) + " photons, " +
+          std::to_string(ref_options.virtual_lights) + " virtual lights, " +
+          std::to_string(ref_options.area_samples) + " area samples, seed " +
+          std::to_string(ref_options.seed) + "), " + std::to_string(reference.width) + "x" +
+          std::to_string(reference.height) + (cached ? ", from the cache" : ""),
+      "each row: bake_maps + finalize + build_pack (cook_s, rays), then the authored state "
+      "recomposed from the pack on the CPU reference and compared with the reference over valid "
+      "texels",
+      "rel_rmse = sqrt(sum (x-r)^2 / sum r^2) over RGB of valid texels",
+      "max_rel_error = max over texels that matter of max_c |x_c-r_c| / max_c r_c; texels that "
+      "matter: reference luminance >= 1% of its 99th percentile",
+      "psnr_db = 10 log10(peak^2 / MSE), peak = 99th percentile of the reference's max channel",
+      "knob rows vary one knob from the preview preset; rows that differ only in encoding reuse "
+      "the bake (cook_s = its bake time + their own pack time)",
+      "texel density rows: a coarser page, resampled to the reference's texels by nearest valid "
+      "texel of the same mesh (world position, normal within 60 deg); a renderer's bilinear "
+      "filter would show a little less error",
+      "import, layout and tracer setup (shared by all rows) are not in cook_s",
+  };
+  notes.insert(notes.end(), skipped.begin(), skipped.end());
+  const std::string csv = csv_text(rows, notes);
+
+  PlotSpec plot;
+  plot.title = "lightpatch accuracy: " + std::filesystem::path(o.scene_path).filename().string() +
+               " (" + std::to_string(o.lightmap_size) + "x" + std::to_string(o.lightmap_size) +
+               " light map)";
+  plot.x_label = "cook time (s)";
+  plot.y_label = "relative RMSE vs reference (%)";
+  for (const Row& r : rows) {
+    auto it = std::find(plot.series.begin(), plot.series.end(), r.setting.knob);
+    if (it == plot.series.end()) it = plot.series.insert(plot.series.end(), r.setting.knob);
+    PlotPoint p;
+    p.x = r.cook_s;
+    p.y = 100.0 * r.m.rel_rmse;
+    p.series = int(it - plot.series.begin());
+    p.front = r.pareto;
+    if (r.setting.label) p.label = quality_name(r.setting.bake.quality);
+    plot.points.push_back(p);
+  }
+  const std::vector<uint8_t> png = render_plot_png(plot);
+  write_file_atomic(o.csv_path, csv.data(), csv.size());
+  write_file_atomic(o.plot_path, png.data(), png.size());
+  if (!o.runtime_csv_path.empty()) {
+    const std::string text = runtime_csv_text(runtime_rows, runtime_notes);
+    write_file_atomic(o.runtime_csv_path, text.data(), text.size());
+  }
+
+  if (!o.quiet) {
+    std::printf("%-34s %9s %12s %10s %9s %9s %8s %s\n", "setting", "cook_s", "rays", "pack_bytes",
+                "rel_rmse", "max_rel", "psnr_db", "pareto");
+    for (const Row& r : rows) {
+      std::printf("%-34s %9.3f %12llu %10llu %8.3f%% %8.2f%% %8.2f %s\n", r.setting.name.c_str(),
+                  r.cook_s, static_cast<unsigned long long>(r.rays),
+                  static_cast<unsigned long long>(r.pack_bytes), 100.0 * r.m.rel_rmse,
+                  100.0 * r.m.max_rel_error, r.m.psnr_db, r.pareto ? "*" : "");
+    }
+    if (!runtime_rows.empty()) {
+      std::printf("\n%-8s %-14s %12s %12s %12s %9s %9s %8s\n", "encoding", "target", "recompose_ms",
+                  "atlas_bytes", "target_bytes", "rel_rmse", "max_rel", "psnr_db");
+      for (const RuntimeRow& r : runtime_rows) {
+        std::printf("%-8s %-14s %12s %12llu %12llu %8.4f%% %8.3f%% %8.2f\n", r.encoding.c_str(),
+                    r.target.c_str(),
+                    r.recompose_ms >= 0.0 ? number(r.recompose_ms, "%.3f").c_str() : "-",
+                    static_cast<unsigned long long>(r.atlas_bytes),
+                    static_cast<unsigned long long>(r.target_bytes), 100.0 * r.m.rel_rmse,
+                    100.0 * r.m.max_rel_error, r.m.psnr_db);
+      }
+    }
+  }
+  progress.message("wrote " + o.csv_path + " and " + o.plot_path + " (" +
+                   std::to_string(rows.size()) + " settings) in " + number(since(t_all), "%.1f") +
+                   " s");
+  return 0;
+}
+
+}  // namespace lightpatch::tool
