@@ -399,7 +399,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["significance_rule"] =
       "a texel is significant when some channel exceeds half an 8-bit output step at the authored "
       "exposure: 0.5 * output_step for the base map, 0.5 * output_step / a_l for C_l and S_ol "
-      "(a_l = authored max(colour) * intensity, floored at 1/100 of the brightest light)";
+      "(a_l = authored max(colour) * intensity, floored at 1/100 of the brightest light), or "
+      "0.5 * peak(C_l) / 255 where that is smaller (a dim light alone keeps 8 bits of its own)";
   j["encoding"]["policy"] = options.encoding == EncodingPolicy::kAuto     ? "auto"
                             : options.encoding == EncodingPolicy::kLinear ? "linear"
                                                                           : "square";
