@@ -116,6 +116,7 @@ struct Baker {
     output_step = compute_output_step();
     float s_max = 0.0f;
     for (const Light& l : scene.lights) s_max = std::max(s_max, max3(l.color) * l.intensity);
+    const std::vector<float> own = own_peaks();
     for (size_t i = 0; i < scene.lights.size(); ++i) {
       const Light& l = scene.lights[i];
       LightPlan p;
@@ -125,6 +126,11 @@ struct Baker {
       float s = std::max(max3(l.color) * l.intensity, 1e-2f * s_max);
       if (!(s > 0.0f)) s = 1.0f;
       p.threshold = output_step / s;
+      // A semi-dynamic light may be the only one on: its significance is also at most one 8-bit
+      // step of its own peak, so a 1e-2 cd light beside a 1e4 cd one still recomposes alone to 8
+      // bits (pack_builder.cpp cuts patches by the same rule). Static lights follow the same rule,
+      // so a light bakes the same whether static or semi-dynamic.
+      if (own[i] > 0.0f) p.threshold = std::min(p.threshold, own[i] / 255.0f);
       p.cutoff = kEarlyOutFraction * p.threshold;
       p.samples = (l.radius > 0.0f && l.type != LightType::kDirectional) ? area_samples : 1;
       plans.push_back(p);
@@ -279,10 +285,38 @@ struct Baker {
     return values[k] / 255.0f;
   }
 
+  // Per scene light: the peak over valid texels of its unshadowed direct irradiance at colour
+  // (1,1,1) and intensity 1.
+  std::vector<float> own_peaks() const {
+    const size_t n = scene.lights.size();
+    std::vector<float> rows(static_cast<size_t>(texels.height) * n, 0.0f);
+    const float eps2 = eps * eps;
+    parallel_for(texels.height, threads, [&](int y) {
+      for (size_t i = 0; i < n; ++i) {
+        float peak = 0.0f;
+        for (int x = 0; x < texels.width; ++x) {
+          const size_t t = texels.index(x, y);
+          if (!texels.valid[t]) continue;
+          const Light& l = scene.lights[i];
+          const float e =
+              punctual_irradiance(l, l.position, texels.position[t], texels.normal[t], eps2);
+          if (std::isfinite(e)) peak = std::max(peak, e);
+        }
+        rows[static_cast<size_t>(y) * n + i] = peak;
+      }
+    });
+    std::vector<float> peaks(n, 0.0f);
+    for (size_t r = 0; r < rows.size(); ++r) peaks[r % n] = std::max(peaks[r % n], rows[r]);
+    return peaks;
+  }
+
   float compute_output_step() const {
     float step = percentile_step(true);
     if (!(step > 0.0f)) step = percentile_step(false);
-    return std::max(step, kMinOutputStep);
+    // The floor is for a black scene only: as a floor under every scene it was an absolute
+    // irradiance, not scaled with the scene (a 10 km room under the same candela is 1e-8 as
+    // bright as a 1 m one, below 1e-6, and every texel was culled as insignificant).
+    return step > 0.0f ? step : kMinOutputStep;
   }
 
   // Shadow samples of scene light `li` (intensity 1, white) at texel t.

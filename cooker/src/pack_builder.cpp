@@ -95,6 +95,18 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
 
   const float half_step = 0.5f * maps.output_step;
+  // Significance of each light's maps (intensity 1): half an output step at its authored factor,
+  // or half a step of its own peak where that is finer, so that a light far dimmer than the
+  // others still recomposes alone to 8 bits (the baker's rule, bake.cpp).
+  std::vector<float> light_threshold(maps.lights.size());
+  for (size_t i = 0; i < maps.lights.size(); ++i) {
+    float peak = 0.0f;
+    for (float v : maps.contribution[i].data) {
+      if (std::isfinite(v)) peak = std::max(peak, v);
+    }
+    light_threshold[i] = half_step / authored[i];
+    if (peak > 0.0f) light_threshold[i] = std::min(light_threshold[i], 0.5f * peak / 255.0f);
+  }
   // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
   // those corners only; a tile also never exceeds an atlas (less its gutters).
   const int max_dim = std::min(options.max_atlas_size - 2, std::max(options.tile_size, 4));
@@ -113,7 +125,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.prototype.kind = kGroupContribution;
     j.prototype.light = int(i);
     j.prototype.weight = authored[i];
-    j.threshold = half_step / authored[i];
+    j.threshold = light_threshold[i];
     j.what = "contribution map of light '" + scene.lights[size_t(maps.lights[i])].name + "'";
     jobs.push_back(j);
   }
@@ -139,7 +151,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.prototype.light = s.light;
     j.prototype.object = s.object;
     j.prototype.weight = authored[size_t(s.light)];
-    j.threshold = half_step / authored[size_t(s.light)];
+    j.threshold = light_threshold[size_t(s.light)];
     j.what = "shadow map of object '" + scene.objects[size_t(s.object)].name + "' for light '" +
              scene.lights[size_t(maps.lights[size_t(s.light)])].name + "'";
     check_map(s.map, layout, 1, 3, j.what);
@@ -172,7 +184,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.prototype.object = p.object_a;
     j.prototype.object_b = p.object_b;
     j.prototype.weight = authored[size_t(p.light)];
-    j.threshold = half_step / authored[size_t(p.light)];
+    j.threshold = light_threshold[size_t(p.light)];
     j.what = "overlap correction of objects '" + scene.objects[size_t(p.object_a)].name + "' and '" +
              scene.objects[size_t(p.object_b)].name + "' for light '" +
              scene.lights[size_t(maps.lights[size_t(p.light)])].name + "'";
@@ -387,7 +399,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["significance_rule"] =
       "a texel is significant when some channel exceeds half an 8-bit output step at the authored "
       "exposure: 0.5 * output_step for the base map, 0.5 * output_step / a_l for C_l and S_ol "
-      "(a_l = authored max(colour) * intensity, floored at 1/100 of the brightest light)";
+      "(a_l = authored max(colour) * intensity, floored at 1/100 of the brightest light), or "
+      "0.5 * peak(C_l) / 255 where that is smaller (a dim light alone keeps 8 bits of its own)";
   j["encoding"]["policy"] = options.encoding == EncodingPolicy::kAuto     ? "auto"
                             : options.encoding == EncodingPolicy::kLinear ? "linear"
                                                                           : "square";

@@ -45,7 +45,8 @@ struct BakedMaps {
   // Irradiance of one 8-bit step of the final light map at the authored exposure (the
   // significance threshold for early outs, pair culling and patch extraction). For a light's
   // C_l/S_ol (baked at intensity 1) the threshold is output_step / (authored max(colour) *
-  // intensity), floored so that a light authored off or at 0 still keeps its patches.
+  // intensity), floored so that a light authored off or at 0 still keeps its patches, and at
+  // most one 8-bit step of the light's own peak (so a very dim light recomposes alone to 8 bits).
   float output_step = 0.0f;
   FloatImage base;                        // B, 3 channels
   std::vector<int> lights;                // Scene::lights index of each semi-dynamic light
