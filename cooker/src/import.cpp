@@ -791,9 +791,12 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
     throw CookError(err(label + " has a negative or non-finite intensity"));
   if (!std::isfinite(l.range) || l.range < 0)
     throw CookError(err(label + " has a negative or non-finite range"));
+  // The schema asks inner < outer, but exporters write inner == outer for a hard-edged cone
+  // (Blender, spot blend 0); the falloff handles it (a step at the edge), so it is accepted.
   if (l.type == LightType::kSpot &&
-      !(l.inner_cone >= 0 && l.inner_cone < l.outer_cone && l.outer_cone <= 1.5707964f))
-    throw CookError(err(label + ": spot cone angles need 0 <= inner < outer <= pi/2"));
+      !(l.inner_cone >= 0 && l.inner_cone <= l.outer_cone && l.outer_cone > 0 &&
+        l.outer_cone <= 1.5707964f))
+    throw CookError(err(label + ": spot cone angles need 0 <= inner <= outer <= pi/2, outer > 0"));
   l.semi_dynamic = extras_flag(n.extras, "semiDynamic");
   if (n.extras.IsObject() && n.extras.Has("lightRadius")) {
     const tinygltf::Value& r = n.extras.Get("lightRadius");

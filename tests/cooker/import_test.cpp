@@ -11,6 +11,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "gltf_files.h"
+#include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/unwrap.h"
 
@@ -354,6 +355,30 @@ TEST(ImportGltf, DracoDecodesToTheSameSurfaceWithinQuantization) {
     EXPECT_NEAR(darea, parea, 1e-3 * parea) << p.name;
     for (const auto& n : d.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-4f);
   }
+}
+
+}  // namespace
+}  // namespace lightpatch::test
+
+namespace lightpatch::test {
+namespace {
+
+// Exporters write inner == outer for a hard-edged spot (Blender with spot blend 0); the schema asks
+// inner < outer, but the cone is well defined, so it imports and lights only inside the cone.
+TEST(ImportGltf, SpotWithInnerEqualToOuterImportsAsAHardCone) {
+  ScratchDir dir;
+  GltfParts p = parts_of(small_room());
+  auto& spot = p.json["extensions"]["KHR_lights_punctual"]["lights"][1];
+  ASSERT_EQ(spot["type"], "spot");
+  spot["spot"] = {{"innerConeAngle", 0.6}, {"outerConeAngle", 0.6}};
+  const Scene s = cooker::import_gltf(write_glb(dir, "hard_spot", p));
+  const auto it = std::find_if(s.lights.begin(), s.lights.end(),
+                               [](const cooker::Light& l) { return l.type == cooker::LightType::kSpot; });
+  ASSERT_NE(it, s.lights.end());
+  EXPECT_FLOAT_EQ(it->inner_cone, 0.6f);
+  EXPECT_FLOAT_EQ(it->outer_cone, 0.6f);
+  spot["spot"] = {{"innerConeAngle", 0.0}, {"outerConeAngle", 0.0}};
+  EXPECT_THROW(cooker::import_gltf(write_glb(dir, "zero_spot", p)), cooker::CookError);
 }
 
 }  // namespace
