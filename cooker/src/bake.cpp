@@ -34,6 +34,8 @@ namespace {
 // Pairs whose shadow map never exceeds this fraction of the light's significance threshold
 // (half an 8-bit step at the authored exposure) would round away: they are skipped.
 constexpr float kPairKeepFraction = 0.5f;
+// The reason of every decision made with the plan off (BakeOptions::plan_effects).
+constexpr const char* kForced = "forced on (--no-plan)";
 // Floor of output_step for a scene that is black at its authored state and has no semi-dynamic
 // light to expose for.
 constexpr float kMinOutputStep = 1e-6f;
@@ -99,6 +101,7 @@ struct Baker {
   EmissiveLights emissive;
   std::vector<LightPlan> plans;  // parallel to Scene::lights
   bool indirect = false;
+  bool plan = true;  // BakeOptions::plan_effects; false: everything forced on
   IndirectPreset preset;
   IndirectSettings settings;
   std::vector<Emitter> static_emitters;
@@ -130,6 +133,7 @@ struct Baker {
       plans.push_back(p);
     }
     indirect = o.indirect;
+    plan = o.plan_effects;
     preset = indirect_preset(o);
     settings.photons = preset.photons;
     settings.virtual_lights = preset.virtual_lights;
@@ -203,6 +207,16 @@ struct Baker {
     const float bias = std::max(settings.area_bias, 0.1f);
     if (g.emitted() == 0) {
       ind.reason = "emits no power";
+      return ind;
+    }
+    if (!plan) {
+      // Every object's bounce traced, whatever its photons carry.
+      ind.enabled = true;
+      ind.cutoff = kEarlyOutFraction * ind.threshold /
+                   static_cast<float>(std::max<size_t>(1, g.lights().size()));
+      ind.reason = std::string(kForced) + ": " + std::to_string(g.emitted()) + " photons, " +
+                   std::to_string(g.lights().size()) + " virtual lights";
+      ind.relevant.assign(scene.objects.size(), 1);
       return ind;
     }
     if (g.deposits() == 0) {
@@ -389,6 +403,7 @@ void fill_report_bake(Report& report, const Baker& b, Quality q, double seconds,
       "99th percentile over valid texels of the authored state's unshadowed direct irradiance "
       "(max channel) / 255";
   j["quality"] = quality_name(q);
+  j["plan_effects"] = b.plan;
   j["area_samples"] = b.area_samples;
   j["threads"] = b.threads;
   j["epsilon"] = b.eps;
@@ -459,7 +474,9 @@ ObjectChanges object_changes(const Baker& b, const Scene& scene, int li, const I
       progress.advance();
       continue;
     }
+    const auto tc = std::chrono::steady_clock::now();
     const PhotonGroup::Change ch = g.change(present);
+    const double change_s = seconds_since(tc);
     for (size_t v = 0; v < ch.delta.size(); ++v) {
       if (ch.delta[v] != glm::vec3(0.0f)) out.deltas[v].push_back({int(j), ch.delta[v]});
     }
@@ -468,13 +485,14 @@ ObjectChanges object_changes(const Baker& b, const Scene& scene, int li, const I
     }
     if (cand.sets[j].size() == 1)
       report.add_decision(what, true,
-                          std::to_string(g.crossing_power()[size_t(o)]) +
+                          (b.plan ? "" : std::string(kForced) + ": ") +
+                              std::to_string(g.crossing_power()[size_t(o)]) +
                               " W of photon paths cross it; " +
-                              std::to_string(ch.object_lights.size()) + " virtual lights on it");
+                              std::to_string(ch.object_lights.size()) + " virtual lights on it",
+                          change_s);
     progress.advance();
   }
   progress.end();
-  (void)b;
   return out;
 }
 
@@ -671,6 +689,13 @@ void report_triples(Report& report, const std::string& group, const GroupMaps& g
   o["triply_blocked"] = gm.triply_blocked;
 }
 
+// Seconds of one light group's whole pass (photons, bounce changes, pass, overlaps), for
+// `cook --measure-plan`'s attribution of the time an indirect-light decision saved.
+void group_time(Report& report, const std::string& group, double seconds) {
+  std::lock_guard<std::mutex> lock(report.mutex());
+  report.root()["bake"]["group_seconds"][group] = seconds;
+}
+
 }  // namespace
 
 const char* quality_name(Quality q) {
@@ -720,7 +745,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       report.add_decision(what, true, "radius " + std::to_string(l.radius) + " m, " +
                                           std::to_string(b.plans[i].samples) + " samples");
     } else {
-      report.add_decision(what, false, "no lightRadius: a point source gives hard shadows");
+      report.add_decision(what, false,
+                          b.plan ? "no lightRadius: a point source gives hard shadows"
+                                 : "no lightRadius: a point source has no size, nothing to force");
     }
   }
   report.add_decision("emissive area lights", !b.emissive.empty(),
@@ -765,7 +792,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     }
     Candidates cand(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) {
-      bool reach = !b.emissive.empty() || (ind.enabled && !bounds[o].empty());
+      bool reach = !b.plan || !b.emissive.empty() || (ind.enabled && !bounds[o].empty());
       for (size_t i = 0; i < scene.lights.size() && !reach; ++i) {
         reach = !scene.lights[i].semi_dynamic &&
                 precull_pair(scene.lights[i], b.plans[i], bounds[o]).empty();
@@ -786,9 +813,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (size_t j = 0; j < cand.objects.size(); ++j) {
       const float peak = peak_of(gm.shadow[j], texels);
       const float keep_at = kPairKeepFraction * b.output_step;
-      const bool keep = peak > keep_at;
+      const bool keep = !b.plan || peak > keep_at;
       report.add_decision("static shadow of object " + scene.objects[size_t(cand.objects[j])].name,
-                          keep, keep_reason(peak, keep_at, "change"));
+                          keep, b.plan ? keep_reason(peak, keep_at, "change") : kForced);
       if (keep) maps.static_shadows.push_back({cand.objects[j], std::move(gm.shadow[j])});
     }
     // The pack has no static pair corrections: overlapping static shadows stay the paper's
@@ -803,6 +830,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
                                      "where both are visible their overlap is darkened twice");
     }
     report_triples(report, "static lights", gm);
+    group_time(report, "static lights", seconds_since(ts));
   }
 
   // Contribution, shadow and pair-correction maps: one pass per semi-dynamic light.
@@ -824,7 +852,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     Candidates cand(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) {
       const std::string why = precull_pair(light, plan, bounds[o]);
-      if (why.empty() || (ind.enabled && !bounds[o].empty())) {
+      if (!b.plan || why.empty() || (ind.enabled && !bounds[o].empty())) {
         cand.add(int(o));
       } else {
         pairs.push_back({{"light", light.name}, {"object", scene.objects[o].name}, {"kept", false},
@@ -846,11 +874,14 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (size_t j = 0; j < cand.objects.size(); ++j) {
       const float peak = peak_of(gm.shadow[j], texels);
       const Object& obj = scene.objects[static_cast<size_t>(cand.objects[j])];
-      const bool keep = peak > keep_at;
+      const bool keep = !b.plan || peak > keep_at;
       shadow_kept[j] = keep ? 1 : 0;
-      pairs.push_back({{"light", light.name}, {"object", obj.name}, {"kept", keep},
-                       {"stage", "traced"}, {"peak", peak},
-                       {"reason", keep_reason(peak, keep_at, "shadow")}});
+      pairs.push_back({{"light", light.name},
+                       {"object", obj.name},
+                       {"kept", keep},
+                       {"stage", "traced"},
+                       {"peak", peak},
+                       {"reason", b.plan ? keep_reason(peak, keep_at, "shadow") : kForced}});
       if (keep) {
         ShadowMap sm;
         sm.light = static_cast<int>(k);
@@ -870,10 +901,12 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (auto& [key, img] : gm.pairs) {
       const int oa = cand.objects[size_t(key.first)], ob = cand.objects[size_t(key.second)];
       const float peak = peak_of(img, texels);
-      const bool keep = peak > keep_at && shadow_kept[size_t(key.first)] && shadow_kept[size_t(key.second)];
+      const bool keep = (!b.plan || peak > keep_at) && shadow_kept[size_t(key.first)] &&
+                        shadow_kept[size_t(key.second)];
       report.add_decision("overlap correction " + light_name(scene, li) + " / " +
-                              scene.objects[size_t(oa)].name + " + " + scene.objects[size_t(ob)].name,
-                          keep, keep_reason(peak, keep_at, "overlap"));
+                              scene.objects[size_t(oa)].name + " + " +
+                              scene.objects[size_t(ob)].name,
+                          keep, b.plan ? keep_reason(peak, keep_at, "overlap") : kForced);
       if (!keep) continue;
       PairCorrectionMap pc;
       pc.light = static_cast<int>(k);
@@ -898,6 +931,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     }
     for (PairCorrectionMap& pc : kept_pairs) maps.pair_corrections.push_back(std::move(pc));
     report_triples(report, light_name(scene, li), gm);
+    group_time(report, light_name(scene, li), seconds_since(ts));
   }
   for (const nlohmann::json& p : pairs) {
     report.add_decision("pair " + p["light"].get<std::string>() + " / " +
