@@ -117,6 +117,7 @@ struct Baker {
     const float scale = scene.scale() > 0.0f ? scene.scale() : 1.0f;
     extent = 1.5f * scale;  // any segment inside the bounds is shorter than the diagonal
     output_step = compute_output_step();
+    build_tiles();
     float s_max = 0.0f;
     for (const Light& l : scene.lights) s_max = std::max(s_max, max3(l.color) * l.intensity);
     for (size_t i = 0; i < scene.lights.size(); ++i) {
@@ -180,6 +181,66 @@ struct Baker {
     for (size_t i = 0; i < scene.lights.size(); ++i) light_size[i] = size_for(p_light[i]);
   }
 
+  // Bounds of the valid texels' positions and normals in 16 x 16 blocks of the texel grid: where
+  // a VPL can shine.
+  struct Tile {
+    glm::vec3 lo, hi, n_lo, n_hi;
+  };
+  std::vector<Tile> tiles;
+  void build_tiles() {
+    constexpr int kTile = 16;
+    for (int ty = 0; ty < texels.height; ty += kTile) {
+      for (int tx = 0; tx < texels.width; tx += kTile) {
+        const glm::vec3 big(std::numeric_limits<float>::max());
+        Tile tile{big, -big, big, -big};
+        bool any = false;
+        for (int y = ty; y < std::min(ty + kTile, texels.height); ++y) {
+          for (int x = tx; x < std::min(tx + kTile, texels.width); ++x) {
+            const size_t t = texels.index(x, y);
+            if (!texels.valid[t]) continue;
+            tile.lo = glm::min(tile.lo, texels.position[t]);
+            tile.hi = glm::max(tile.hi, texels.position[t]);
+            tile.n_lo = glm::min(tile.n_lo, texels.normal[t]);
+            tile.n_hi = glm::max(tile.n_hi, texels.normal[t]);
+            any = true;
+          }
+        }
+        if (any) tiles.push_back(tile);
+      }
+    }
+  }
+
+  // Largest form factor cosA cosB / (pi r^2 + bias A) VPL v gives any valid texel of a tile:
+  // cosB <= h / r, h the height of the tile's texels above the VPL's plane, cosA <= g / r, g the
+  // largest n . (VPL - texel) over the tile's normals and positions (interval bounds), r at least
+  // the distance to the tile less the gather's offsets (which only lower both cosines). 0 where
+  // the texels lie in or behind the VPL's plane: an open plane's VPLs light nothing.
+  float vpl_bound(const VirtualLight& v, float bias) const {
+    constexpr float kPi = 3.14159265358979f;
+    float best = 0.0f;
+    for (const Tile& tile : tiles) {
+      float h = -std::numeric_limits<float>::max();
+      for (int c = 0; c < 8; ++c) {
+        const glm::vec3 corner(c & 1 ? tile.hi.x : tile.lo.x, c & 2 ? tile.hi.y : tile.lo.y,
+                               c & 4 ? tile.hi.z : tile.lo.z);
+        h = std::max(h, glm::dot(v.normal, corner - v.position));
+      }
+      if (!(h > 0.0f)) continue;
+      float g = 0.0f;
+      for (int i = 0; i < 3; ++i) {
+        const float q_lo = v.position[i] - tile.hi[i], q_hi = v.position[i] - tile.lo[i];
+        g += std::max(
+            {tile.n_lo[i] * q_lo, tile.n_lo[i] * q_hi, tile.n_hi[i] * q_lo, tile.n_hi[i] * q_hi});
+      }
+      if (!(g > 0.0f)) continue;
+      const float dist = glm::length(glm::clamp(v.position, tile.lo, tile.hi) - v.position);
+      const float r = std::max(dist - 2.0f * eps, 2.0f * eps);
+      const float f = std::min(1.0f, h / r) * std::min(1.0f, g / r) / (kPi * r * r + bias * v.area);
+      best = std::max(best, f);
+    }
+    return best;
+  }
+
   // Traces a group's photons and decides whether its indirect light is worth gathering.
   // li < 0: the static group. `track`: record the objects photon paths cross.
   Indirect make_indirect(int li, bool track) const {
@@ -227,9 +288,14 @@ struct Baker {
                              std::to_string(g.emitted()) + " left the scene, the rest hit black)";
       return ind;
     }
-    // Peak irradiance the VPLs could give any texel (each at its biased nearest).
+    // Peak irradiance the VPLs could give any texel (each at the tile it lights most).
+    std::vector<float> per_vpl(g.lights().size());
+    parallel_for(static_cast<int>(per_vpl.size()), threads, [&](int i) {
+      const VirtualLight& v = g.lights()[size_t(i)];
+      per_vpl[size_t(i)] = max3(v.power) * vpl_bound(v, bias);
+    });
     double bound = 0.0;
-    for (const VirtualLight& v : g.lights()) bound += max3(v.power) / (bias * v.area);
+    for (float f : per_vpl) bound += f;
     if (bound < 0.5 * ind.threshold) {
       ind.reason = "indirect irradiance bound " + std::to_string(bound) +
                    " below half an output step (" + std::to_string(0.5f * ind.threshold) + ")";

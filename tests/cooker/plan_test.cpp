@@ -63,6 +63,69 @@ const nlohmann::json* find_decision(const nlohmann::json& report, const std::str
   return nullptr;
 }
 
+// An open plane receives no bounce: its photons' virtual lights lie in its plane. The plan turns
+// the lamp's indirect light off, so it culls the pair of a box below the floor, out of the lamp's
+// reach; forced, the bounce is gathered (and is below half an output step everywhere) and the
+// pair traced and kept.
+TEST(Plan, OpenPlaneGetsNoBounceAndItsFarPairIsCulled) {
+  cooker::Scene scene;
+  add_quad(scene, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
+  add_object_box(scene, {-0.5f, -8.0f, -0.5f}, {0.5f, -7.0f, 0.5f}, "cellar_box");
+  cooker::Light lamp = point_light("lamp", {0, 2, 0}, 5.0f, true);
+  lamp.range = 4.0f;
+  scene.lights = {lamp};
+  finish(scene);
+  const cooker::TexelSet texels = grid_texels(32, 32, {-4, 0, -4}, {8, 0, 0}, {0, 0, 8}, {0, 1, 0});
+  auto tracer = cooker::make_embree_tracer(scene);
+  cooker::Progress progress(true);
+  BakeOptions o;
+  o.quality = cooker::Quality::kDraft;
+  o.photons = 5000;
+  Report planned_report, forced_report;
+  const BakedMaps planned =
+      cooker::bake_maps(scene, bare_layout(32, 32), texels, *tracer, o, progress, planned_report);
+  o.plan_effects = false;
+  const BakedMaps forced =
+      cooker::bake_maps(scene, bare_layout(32, 32), texels, *tracer, o, progress, forced_report);
+  const nlohmann::json& pr = planned_report.root();
+  const nlohmann::json& fr = forced_report.root();
+  const nlohmann::json* ind = find_decision(pr, "indirect light: lamp");
+  ASSERT_NE(ind, nullptr);
+  EXPECT_FALSE((*ind)["taken"].get<bool>());
+  EXPECT_NE((*ind)["reason"].get<std::string>().find("below half an output step"),
+            std::string::npos)
+      << (*ind)["reason"];
+  ASSERT_NE(find_decision(fr, "indirect light: lamp"), nullptr);
+  EXPECT_TRUE((*find_decision(fr, "indirect light: lamp"))["taken"].get<bool>());
+  const nlohmann::json* pair = find_decision(pr, "pair lamp / cellar_box");
+  ASSERT_NE(pair, nullptr);
+  EXPECT_FALSE((*pair)["taken"].get<bool>());
+  EXPECT_NE((*pair)["reason"].get<std::string>().find("reach"), std::string::npos);
+  EXPECT_TRUE(planned.shadows.empty());
+  ASSERT_EQ(forced.shadows.size(), 1u);
+  EXPECT_EQ(fr["pairs_skipped"].get<int>(), 0);
+  ASSERT_EQ(planned.contribution.size(), 1u);
+  ASSERT_EQ(forced.contribution.size(), 1u);
+  EXPECT_EQ(planned.contribution[0].channels, 1);
+  EXPECT_EQ(forced.contribution[0].channels, 3);
+  // What the forced bounce adds, and the shadow the box casts, stay below half an output step at
+  // the authored exposure (lamp intensity 5).
+  const float half_step = 0.5f * planned.output_step / 5.0f;
+  float worst = 0.0f, peak = 0.0f;
+  for (int y = 0; y < 32; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const float a = planned.contribution[0].at(x, y, 0);
+        const float b = forced.contribution[0].at(x, y, c) - forced.shadows[0].map.at(x, y, c);
+        worst = std::max(worst, std::fabs(a - b));
+        peak = std::max(peak, a);
+      }
+    }
+  }
+  EXPECT_GT(peak, 20.0f * half_step);
+  EXPECT_LE(worst, half_step);
+}
+
 nlohmann::json load(const std::string& path) {
   return nlohmann::json::parse(read_bytes(path));
 }
