@@ -183,6 +183,12 @@ TEST(Plan, ForcedCookKeepsWhatThePlanSkipsAndRecomposesTheSameStates) {
   const nlohmann::json forced = load(dir.file("forced.json"));
   EXPECT_EQ(planned["bake"]["plan_effects"], true);
   EXPECT_EQ(forced["bake"]["plan_effects"], false);
+  // bake-state takes --no-plan too (every object's bounce) and bakes the same layout.
+  expect_success(cat({"bake-state", scene, "--no-plan", "-o", dir.file("state.pfm"), "--report",
+                      dir.file("state.json")},
+                     kFast));
+  EXPECT_EQ(load(dir.file("state.json"))["bake"]["plan_effects"], false);
+  EXPECT_EQ(cooker::read_pfm(dir.file("state.pfm")).width, 64);
 
   // The far crate: with indirect light every object is a candidate (it could block bounce), so
   // the plan traces its pair and drops it for its peak; forced, the pair is kept.
