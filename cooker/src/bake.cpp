@@ -34,6 +34,8 @@ namespace {
 // Pairs whose shadow map never exceeds this fraction of the light's significance threshold
 // (half an 8-bit step at the authored exposure) would round away: they are skipped.
 constexpr float kPairKeepFraction = 0.5f;
+// The reason of every decision made with the plan off (BakeOptions::plan_effects).
+constexpr const char* kForced = "forced on (--no-plan)";
 // Floor of output_step for a scene that is black at its authored state and has no semi-dynamic
 // light to expose for.
 constexpr float kMinOutputStep = 1e-6f;
@@ -99,6 +101,7 @@ struct Baker {
   EmissiveLights emissive;
   std::vector<LightPlan> plans;  // parallel to Scene::lights
   bool indirect = false;
+  bool plan = true;  // BakeOptions::plan_effects; false: everything forced on
   IndirectPreset preset;
   IndirectSettings settings;
   std::vector<Emitter> static_emitters;
@@ -114,6 +117,7 @@ struct Baker {
     const float scale = scene.scale() > 0.0f ? scene.scale() : 1.0f;
     extent = 1.5f * scale;  // any segment inside the bounds is shorter than the diagonal
     output_step = compute_output_step();
+    build_tiles();
     float s_max = 0.0f;
     for (const Light& l : scene.lights) s_max = std::max(s_max, max3(l.color) * l.intensity);
     const std::vector<float> own = own_peaks();
@@ -136,6 +140,7 @@ struct Baker {
       plans.push_back(p);
     }
     indirect = o.indirect;
+    plan = o.plan_effects;
     preset = indirect_preset(o);
     settings.photons = preset.photons;
     settings.virtual_lights = preset.virtual_lights;
@@ -182,6 +187,66 @@ struct Baker {
     for (size_t i = 0; i < scene.lights.size(); ++i) light_size[i] = size_for(p_light[i]);
   }
 
+  // Bounds of the valid texels' positions and normals in 16 x 16 blocks of the texel grid: where
+  // a VPL can shine.
+  struct Tile {
+    glm::vec3 lo, hi, n_lo, n_hi;
+  };
+  std::vector<Tile> tiles;
+  void build_tiles() {
+    constexpr int kTile = 16;
+    for (int ty = 0; ty < texels.height; ty += kTile) {
+      for (int tx = 0; tx < texels.width; tx += kTile) {
+        const glm::vec3 big(std::numeric_limits<float>::max());
+        Tile tile{big, -big, big, -big};
+        bool any = false;
+        for (int y = ty; y < std::min(ty + kTile, texels.height); ++y) {
+          for (int x = tx; x < std::min(tx + kTile, texels.width); ++x) {
+            const size_t t = texels.index(x, y);
+            if (!texels.valid[t]) continue;
+            tile.lo = glm::min(tile.lo, texels.position[t]);
+            tile.hi = glm::max(tile.hi, texels.position[t]);
+            tile.n_lo = glm::min(tile.n_lo, texels.normal[t]);
+            tile.n_hi = glm::max(tile.n_hi, texels.normal[t]);
+            any = true;
+          }
+        }
+        if (any) tiles.push_back(tile);
+      }
+    }
+  }
+
+  // Largest form factor cosA cosB / (pi r^2 + bias A) VPL v gives any valid texel of a tile:
+  // cosB <= h / r, h the height of the tile's texels above the VPL's plane, cosA <= g / r, g the
+  // largest n . (VPL - texel) over the tile's normals and positions (interval bounds), r at least
+  // the distance to the tile less the gather's offsets (which only lower both cosines). 0 where
+  // the texels lie in or behind the VPL's plane: an open plane's VPLs light nothing.
+  float vpl_bound(const VirtualLight& v, float bias) const {
+    constexpr float kPi = 3.14159265358979f;
+    float best = 0.0f;
+    for (const Tile& tile : tiles) {
+      float h = -std::numeric_limits<float>::max();
+      for (int c = 0; c < 8; ++c) {
+        const glm::vec3 corner(c & 1 ? tile.hi.x : tile.lo.x, c & 2 ? tile.hi.y : tile.lo.y,
+                               c & 4 ? tile.hi.z : tile.lo.z);
+        h = std::max(h, glm::dot(v.normal, corner - v.position));
+      }
+      if (!(h > 0.0f)) continue;
+      float g = 0.0f;
+      for (int i = 0; i < 3; ++i) {
+        const float q_lo = v.position[i] - tile.hi[i], q_hi = v.position[i] - tile.lo[i];
+        g += std::max(
+            {tile.n_lo[i] * q_lo, tile.n_lo[i] * q_hi, tile.n_hi[i] * q_lo, tile.n_hi[i] * q_hi});
+      }
+      if (!(g > 0.0f)) continue;
+      const float dist = glm::length(glm::clamp(v.position, tile.lo, tile.hi) - v.position);
+      const float r = std::max(dist - 2.0f * eps, 2.0f * eps);
+      const float f = std::min(1.0f, h / r) * std::min(1.0f, g / r) / (kPi * r * r + bias * v.area);
+      best = std::max(best, f);
+    }
+    return best;
+  }
+
   // Traces a group's photons and decides whether its indirect light is worth gathering.
   // li < 0: the static group. `track`: record the objects photon paths cross.
   Indirect make_indirect(int li, bool track) const {
@@ -211,6 +276,16 @@ struct Baker {
       ind.reason = "emits no power";
       return ind;
     }
+    if (!plan) {
+      // Every object's bounce traced, whatever its photons carry.
+      ind.enabled = true;
+      ind.cutoff = kEarlyOutFraction * ind.threshold /
+                   static_cast<float>(std::max<size_t>(1, g.lights().size()));
+      ind.reason = std::string(kForced) + ": " + std::to_string(g.emitted()) + " photons, " +
+                   std::to_string(g.lights().size()) + " virtual lights";
+      ind.relevant.assign(scene.objects.size(), 1);
+      return ind;
+    }
     if (g.deposits() == 0) {
       ind.reason = g.lost() == g.emitted()
                        ? "all " + std::to_string(g.emitted()) +
@@ -219,9 +294,14 @@ struct Baker {
                              std::to_string(g.emitted()) + " left the scene, the rest hit black)";
       return ind;
     }
-    // Peak irradiance the VPLs could give any texel (each at its biased nearest).
+    // Peak irradiance the VPLs could give any texel (each at the tile it lights most).
+    std::vector<float> per_vpl(g.lights().size());
+    parallel_for(static_cast<int>(per_vpl.size()), threads, [&](int i) {
+      const VirtualLight& v = g.lights()[size_t(i)];
+      per_vpl[size_t(i)] = max3(v.power) * vpl_bound(v, bias);
+    });
     double bound = 0.0;
-    for (const VirtualLight& v : g.lights()) bound += max3(v.power) / (bias * v.area);
+    for (float f : per_vpl) bound += f;
     if (bound < 0.5 * ind.threshold) {
       ind.reason = "indirect irradiance bound " + std::to_string(bound) +
                    " below half an output step (" + std::to_string(0.5f * ind.threshold) + ")";
@@ -423,6 +503,7 @@ void fill_report_bake(Report& report, const Baker& b, Quality q, double seconds,
       "99th percentile over valid texels of the authored state's unshadowed direct irradiance "
       "(max channel) / 255";
   j["quality"] = quality_name(q);
+  j["plan_effects"] = b.plan;
   j["area_samples"] = b.area_samples;
   j["threads"] = b.threads;
   j["epsilon"] = b.eps;
@@ -493,7 +574,9 @@ ObjectChanges object_changes(const Baker& b, const Scene& scene, int li, const I
       progress.advance();
       continue;
     }
+    const auto tc = std::chrono::steady_clock::now();
     const PhotonGroup::Change ch = g.change(present);
+    const double change_s = seconds_since(tc);
     for (size_t v = 0; v < ch.delta.size(); ++v) {
       if (ch.delta[v] != glm::vec3(0.0f)) out.deltas[v].push_back({int(j), ch.delta[v]});
     }
@@ -502,13 +585,14 @@ ObjectChanges object_changes(const Baker& b, const Scene& scene, int li, const I
     }
     if (cand.sets[j].size() == 1)
       report.add_decision(what, true,
-                          std::to_string(g.crossing_power()[size_t(o)]) +
+                          (b.plan ? "" : std::string(kForced) + ": ") +
+                              std::to_string(g.crossing_power()[size_t(o)]) +
                               " W of photon paths cross it; " +
-                              std::to_string(ch.object_lights.size()) + " virtual lights on it");
+                              std::to_string(ch.object_lights.size()) + " virtual lights on it",
+                          change_s);
     progress.advance();
   }
   progress.end();
-  (void)b;
   return out;
 }
 
@@ -705,6 +789,13 @@ void report_triples(Report& report, const std::string& group, const GroupMaps& g
   o["triply_blocked"] = gm.triply_blocked;
 }
 
+// Seconds of one light group's whole pass (photons, bounce changes, pass, overlaps), for
+// `cook --measure-plan`'s attribution of the time an indirect-light decision saved.
+void group_time(Report& report, const std::string& group, double seconds) {
+  std::lock_guard<std::mutex> lock(report.mutex());
+  report.root()["bake"]["group_seconds"][group] = seconds;
+}
+
 }  // namespace
 
 const char* quality_name(Quality q) {
@@ -754,7 +845,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       report.add_decision(what, true, "radius " + std::to_string(l.radius) + " m, " +
                                           std::to_string(b.plans[i].samples) + " samples");
     } else {
-      report.add_decision(what, false, "no lightRadius: a point source gives hard shadows");
+      report.add_decision(what, false,
+                          b.plan ? "no lightRadius: a point source gives hard shadows"
+                                 : "no lightRadius: a point source has no size, nothing to force");
     }
   }
   report.add_decision("emissive area lights", !b.emissive.empty(),
@@ -799,7 +892,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     }
     Candidates cand(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) {
-      bool reach = !b.emissive.empty() || (ind.enabled && !bounds[o].empty());
+      bool reach = !b.plan || !b.emissive.empty() || (ind.enabled && !bounds[o].empty());
       for (size_t i = 0; i < scene.lights.size() && !reach; ++i) {
         reach = !scene.lights[i].semi_dynamic &&
                 precull_pair(scene.lights[i], b.plans[i], bounds[o]).empty();
@@ -820,9 +913,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (size_t j = 0; j < cand.objects.size(); ++j) {
       const float peak = peak_of(gm.shadow[j], texels);
       const float keep_at = kPairKeepFraction * b.output_step;
-      const bool keep = peak > keep_at;
+      const bool keep = !b.plan || peak > keep_at;
       report.add_decision("static shadow of object " + scene.objects[size_t(cand.objects[j])].name,
-                          keep, keep_reason(peak, keep_at, "change"));
+                          keep, b.plan ? keep_reason(peak, keep_at, "change") : kForced);
       if (keep) maps.static_shadows.push_back({cand.objects[j], std::move(gm.shadow[j])});
     }
     // The pack has no static pair corrections: overlapping static shadows stay the paper's
@@ -837,6 +930,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
                                      "where both are visible their overlap is darkened twice");
     }
     report_triples(report, "static lights", gm);
+    group_time(report, "static lights", seconds_since(ts));
   }
 
   // Contribution, shadow and pair-correction maps: one pass per semi-dynamic light.
@@ -858,7 +952,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     Candidates cand(scene.objects.size());
     for (size_t o = 0; o < scene.objects.size(); ++o) {
       const std::string why = precull_pair(light, plan, bounds[o]);
-      if (why.empty() || (ind.enabled && !bounds[o].empty())) {
+      if (!b.plan || why.empty() || (ind.enabled && !bounds[o].empty())) {
         cand.add(int(o));
       } else {
         pairs.push_back({{"light", light.name}, {"object", scene.objects[o].name}, {"kept", false},
@@ -880,11 +974,14 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (size_t j = 0; j < cand.objects.size(); ++j) {
       const float peak = peak_of(gm.shadow[j], texels);
       const Object& obj = scene.objects[static_cast<size_t>(cand.objects[j])];
-      const bool keep = peak > keep_at;
+      const bool keep = !b.plan || peak > keep_at;
       shadow_kept[j] = keep ? 1 : 0;
-      pairs.push_back({{"light", light.name}, {"object", obj.name}, {"kept", keep},
-                       {"stage", "traced"}, {"peak", peak},
-                       {"reason", keep_reason(peak, keep_at, "shadow")}});
+      pairs.push_back({{"light", light.name},
+                       {"object", obj.name},
+                       {"kept", keep},
+                       {"stage", "traced"},
+                       {"peak", peak},
+                       {"reason", b.plan ? keep_reason(peak, keep_at, "shadow") : kForced}});
       if (keep) {
         ShadowMap sm;
         sm.light = static_cast<int>(k);
@@ -904,10 +1001,12 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (auto& [key, img] : gm.pairs) {
       const int oa = cand.objects[size_t(key.first)], ob = cand.objects[size_t(key.second)];
       const float peak = peak_of(img, texels);
-      const bool keep = peak > keep_at && shadow_kept[size_t(key.first)] && shadow_kept[size_t(key.second)];
+      const bool keep = (!b.plan || peak > keep_at) && shadow_kept[size_t(key.first)] &&
+                        shadow_kept[size_t(key.second)];
       report.add_decision("overlap correction " + light_name(scene, li) + " / " +
-                              scene.objects[size_t(oa)].name + " + " + scene.objects[size_t(ob)].name,
-                          keep, keep_reason(peak, keep_at, "overlap"));
+                              scene.objects[size_t(oa)].name + " + " +
+                              scene.objects[size_t(ob)].name,
+                          keep, b.plan ? keep_reason(peak, keep_at, "overlap") : kForced);
       if (!keep) continue;
       PairCorrectionMap pc;
       pc.light = static_cast<int>(k);
@@ -932,6 +1031,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     }
     for (PairCorrectionMap& pc : kept_pairs) maps.pair_corrections.push_back(std::move(pc));
     report_triples(report, light_name(scene, li), gm);
+    group_time(report, light_name(scene, li), seconds_since(ts));
   }
   for (const nlohmann::json& p : pairs) {
     report.add_decision("pair " + p["light"].get<std::string>() + " / " +

@@ -229,7 +229,15 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     for (SourcePatch& p : per_job[size_t(i)]) {
       if (p.channels != 3) continue;
       float spread = 0.0f;
-      const bool collapsed = collapse_untinted(p, &spread);
+      bool collapsed = false;
+      if (!options.keep_colour) {
+        collapsed = collapse_untinted(p, &spread);
+      } else {
+        for (size_t k = 0; k + 2 < p.values.size(); k += 3) {
+          const float* v = &p.values[k];
+          spread = std::max(spread, std::max({v[0], v[1], v[2]}) - std::min({v[0], v[1], v[2]}));
+        }
+      }
       ColourDecision& d = colour[size_t(i)];
       (collapsed ? d.one : d.three)++;
       d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);
@@ -430,6 +438,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       "a 3-channel (bounce-tinted) patch of C_l or S_ol keeps 3 channels where some texel's "
       "max - min over channels exceeds half an output step (final-map units at the authored "
       "state); otherwise it is stored as 1 channel holding (max + min) / 2";
+  j["colour"]["forced"] = options.keep_colour;
   j["colour"]["patches_3_channel"] = three;
   j["colour"]["patches_1_channel_from_3"] = one;
   j["colour"]["maps"] = maps_colour;

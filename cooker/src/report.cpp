@@ -19,6 +19,14 @@ void Report::add_decision(const std::string& what, bool taken, const std::string
   decisions.push_back({{"what", what}, {"taken", taken}, {"reason", reason}});
 }
 
+void Report::add_decision(const std::string& what, bool taken, const std::string& reason,
+                          double seconds) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  nlohmann::json& decisions = root_["decisions"];
+  if (!decisions.is_array()) decisions = nlohmann::json::array();
+  decisions.push_back({{"what", what}, {"taken", taken}, {"reason", reason}, {"seconds", seconds}});
+}
+
 void Report::write(const std::string& path) const {
   const std::string text = root_.dump(2) + "\n";
   write_file_atomic(path, text.data(), text.size());

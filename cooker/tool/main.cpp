@@ -25,6 +25,10 @@ constexpr const char* kCookOptionsHelp =
     "  --quality Q            draft | preview (default) | production: photons, virtual lights,\n"
     "                         area-light samples and gather quality\n"
     "  --no-indirect          direct light only (no photons, no bounce)\n"
+    "  --no-plan              force every effect on: indirect light for every light group that\n"
+    "                         emits photons with every object's bounce, every light-object pair\n"
+    "                         traced and kept, every measured overlap correction kept, tinted\n"
+    "                         patches kept at 3 channels (for bake-state: every object's bounce)\n"
     "  --photons N            photons for the whole scene (overrides the quality preset)\n"
     "  --virtual-lights N     virtual indirect lights for the whole scene (overrides the preset)\n"
     "  --area-samples N       samples per texel for lights with a radius and emissive surfaces\n"
@@ -38,7 +42,12 @@ constexpr const char* kCookHelp =
     "per-object shadow maps and pair corrections, quantized to 8-bit RGBA atlases.\n"
     "Lights and mesh nodes with extras {\"semiDynamic\": true} become switchable.\n\n"
     "options:\n"
-    "  -o, --output OUT.lpk   the pack (written atomically; an existing file survives a failure)\n";
+    "  -o, --output OUT.lpk   the pack (written atomically; an existing file survives a failure)\n"
+    "  --measure-plan         after the cook, bake and pack twice more, not written: with\n"
+    "                         --no-plan, then as planned (both timed warm), and add to the\n"
+    "                         report a \"plan\" object: seconds, rays, bytes and\n"
+    "                         patches planned vs forced, what the plan saved, decisions taken and\n"
+    "                         skipped per category; a one-line summary on stderr\n";
 
 constexpr const char* kBakeStateHelp =
     "Bakes one scene state directly, as a conventional light mapper would: the ground truth a\n"
@@ -89,7 +98,8 @@ constexpr const char* kAccuracyHelp =
 const Verb kVerbs[] = {
     {"cook", lightpatch::tool::verb_cook,
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
-     "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--photons N] "
+     "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
+     "[--measure-plan] [--photons N] "
      "[--virtual-lights N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,

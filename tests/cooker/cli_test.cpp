@@ -160,7 +160,7 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
   const ToolRun cook = expect_success({"cook", "--help"});
   for (const char* option : {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect",
                              "--photons", "--virtual-lights", "--area-samples", "--seed",
-                             "--threads", "--report", "--quiet"}) {
+                             "--threads", "--report", "--quiet", "--no-plan", "--measure-plan"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
 }

@@ -36,6 +36,11 @@ struct BakeOptions {
   int photons = 0;          // photons emitted for the whole scene (split by power); 0 = preset
   int virtual_lights = 0;   // virtual indirect lights for the whole scene; 0 = preset
   float area_bias = -1.0f;  // cosA cosB / (pi r^2 + bias A); < 0 = preset
+  // The effect plan (DESIGN.md, "Only what the scene calls for"). false forces everything on, to
+  // measure what the plan saves: indirect light for every light group that emits photons with
+  // every object's bounce traced, every light-object pair traced and kept (no reach or cone
+  // culling, no peak threshold), every measured overlap correction kept.
+  bool plan_effects = true;
 };
 
 // The preset's photons, virtual lights and area bias (after applying any overrides in `options`).

@@ -22,6 +22,9 @@ struct PackOptions {
   // records; 32 gave the fewest atlas bytes per scene in our measurements (README, Numbers).
   int tile_size = 32;
   EncodingPolicy encoding = EncodingPolicy::kAuto;
+  // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step
+  // (the effect plan forced on, `cook --no-plan`).
+  bool keep_colour = false;
 };
 
 // Builds the pack bytes. Statistics and the encoding decision go into `report`.

@@ -16,6 +16,8 @@ class Report {
   std::mutex& mutex() { return mutex_; }
   void stage_time(const std::string& stage, double seconds);
   void add_decision(const std::string& what, bool taken, const std::string& reason);
+  // With the seconds the decision's work took (where one decision's work is timed on its own).
+  void add_decision(const std::string& what, bool taken, const std::string& reason, double seconds);
   // Atomic write (temporary file + rename). Throws CookError.
   void write(const std::string& path) const;
 
