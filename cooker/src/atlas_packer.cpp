@@ -39,10 +39,14 @@ class Skyline {
       if (s.x + s.w > x + w) next.push_back({x + w, s.y, s.x + s.w - (x + w)});
     }
     next.push_back({x, y_top, w});
-    std::sort(next.begin(), next.end(), [](const Segment& a, const Segment& b) { return a.x < b.x; });
+    std::sort(next.begin(), next.end(),
+              [](const Segment& a, const Segment& b) { return a.x < b.x; });
     segs_.clear();
     for (const Segment& s : next) {
-      if (!segs_.empty() && segs_.back().y == s.y) segs_.back().w += s.w; else segs_.push_back(s);
+      if (!segs_.empty() && segs_.back().y == s.y)
+        segs_.back().w += s.w;
+      else
+        segs_.push_back(s);
     }
   }
 
@@ -101,13 +105,14 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
   AtlasLayout out;
   out.placements.resize(items.size());
   if (max_size < kMinAtlasSize || (max_size & (max_size - 1)) != 0) {
-    throw CookError("maximum atlas size " + std::to_string(max_size) + " must be a power of two >= " +
-                    std::to_string(kMinAtlasSize));
+    throw CookError("maximum atlas size " + std::to_string(max_size) +
+                    " must be a power of two >= " + std::to_string(kMinAtlasSize));
   }
   for (const PackItem& it : items) {
     if (it.width + 2 > max_size || it.height + 2 > max_size) {
       throw CookError("a " + std::to_string(it.width) + "x" + std::to_string(it.height) +
-                      " patch does not fit a " + std::to_string(max_size) + " atlas with its gutter");
+                      " patch does not fit a " + std::to_string(max_size) +
+                      " atlas with its gutter");
     }
   }
   std::vector<size_t> order(items.size());
@@ -126,8 +131,8 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
     if (out.atlases.size() >= 256) throw CookError("the patches need more than 256 atlases");
     const int atlas_index = static_cast<int>(out.atlases.size());
     const PackItem& first = items[order[0]];
-    Atlas atlas(std::min(max_size, pow2_at_least(std::max(
-                                       {kMinAtlasSize, first.width + 2, first.height + 2}))));
+    Atlas atlas(std::min(
+        max_size, pow2_at_least(std::max({kMinAtlasSize, first.width + 2, first.height + 2}))));
     int64_t remaining = 0;
     for (size_t i : order) remaining += cost(i);
     int rows = 0;

@@ -17,8 +17,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <mutex>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -44,22 +44,30 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-float max3(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
+float max3(const glm::vec3& v) {
+  return std::max({v.x, v.y, v.z});
+}
 
 int preset_samples(Quality q) {
   switch (q) {
-    case Quality::kDraft: return 4;
-    case Quality::kPreview: return 16;
-    case Quality::kProduction: return 64;
+    case Quality::kDraft:
+      return 4;
+    case Quality::kPreview:
+      return 16;
+    case Quality::kProduction:
+      return 64;
   }
   return 16;
 }
 
 IndirectPreset preset_indirect(Quality q) {
   switch (q) {
-    case Quality::kDraft: return {30000, 192, 1.0f};
-    case Quality::kPreview: return {120000, 512, 1.0f};
-    case Quality::kProduction: return {500000, 2048, 0.5f};
+    case Quality::kDraft:
+      return {30000, 192, 1.0f};
+    case Quality::kPreview:
+      return {120000, 512, 1.0f};
+    case Quality::kProduction:
+      return {500000, 2048, 0.5f};
   }
   return {120000, 512, 1.0f};
 }
@@ -75,8 +83,8 @@ struct Indirect {
   std::unique_ptr<PhotonGroup> photons;
   bool enabled = false;
   std::string reason;
-  float threshold = 0.0f;        // significance of this group's irradiance (its map's units)
-  float cutoff = 0.0f;           // per-VPL early out
+  float threshold = 0.0f;         // significance of this group's irradiance (its map's units)
+  float cutoff = 0.0f;            // per-VPL early out
   std::vector<uint8_t> relevant;  // per object: photons crossing it matter (its bounce is traced)
   std::vector<std::string> irrelevant_reason;
 };
@@ -320,10 +328,10 @@ struct Baker {
       if (peak >= 0.5f * ind.threshold) {
         ind.relevant[o] = 1;
       } else {
-        ind.irrelevant_reason[o] =
-            p > 0.0f ? "photons crossing it carry " + std::to_string(p) + " W, peak bound " +
-                           std::to_string(peak) + " below half an output step"
-                     : "no photon of the light crosses it";
+        ind.irrelevant_reason[o] = p > 0.0f ? "photons crossing it carry " + std::to_string(p) +
+                                                  " W, peak bound " + std::to_string(peak) +
+                                                  " below half an output step"
+                                            : "no photon of the light crosses it";
       }
     }
     return ind;
@@ -510,7 +518,8 @@ void fill_report_bake(Report& report, const Baker& b, Quality q, double seconds,
   j["rays"] = j.value("rays", uint64_t{0}) + rays;
   j["seconds"] = j.value("seconds", 0.0) + seconds;
   const double total_s = j["seconds"].get<double>();
-  j["rays_per_second"] = total_s > 0.0 ? static_cast<double>(j["rays"].get<uint64_t>()) / total_s : 0.0;
+  j["rays_per_second"] =
+      total_s > 0.0 ? static_cast<double>(j["rays"].get<uint64_t>()) / total_s : 0.0;
   nlohmann::json& ind = report.root()["indirect"];
   ind["enabled"] = b.indirect;
   ind["photons"] = b.preset.photons;
@@ -670,8 +679,10 @@ GroupMaps trace_group(const Baker& b, int li, const Indirect& ind, const Candida
               const std::pair<int, int> key(slots[a], slots[c]);
               auto it = std::find_if(p_acc.begin(), p_acc.end(),
                                      [&](const auto& v) { return v.first == key; });
-              if (it == p_acc.end()) p_acc.push_back({key, e});
-              else it->second += e;
+              if (it == p_acc.end())
+                p_acc.push_back({key, e});
+              else
+                it->second += e;
             }
           (slots.size() == 2 ? doubly : triply) += max3(e);
         }
@@ -689,7 +700,8 @@ GroupMaps trace_group(const Baker& b, int li, const Indirect& ind, const Candida
         }
         samples.clear();
         b.emissive_samples(t, samples);
-        for (const LightSample& s : samples) segment(s.origin, s.dir, s.tmin, s.tmax, s.irradiance, false);
+        for (const LightSample& s : samples)
+          segment(s.origin, s.dir, s.tmin, s.tmax, s.irradiance, false);
       } else {
         samples.clear();
         b.light_samples(li, t, samples);
@@ -702,7 +714,8 @@ GroupMaps trace_group(const Baker& b, int li, const Indirect& ind, const Candida
         for (size_t v = 0; v < g.lights().size(); ++v) {
           glm::vec3 o, d;
           float tmax = 0.0f;
-          const float f = vpl_factor(g.lights()[v], p, nrm, b.settings.area_bias, b.eps, &o, &d, &tmax);
+          const float f =
+              vpl_factor(g.lights()[v], p, nrm, b.settings.area_bias, b.eps, &o, &d, &tmax);
           if (!(f > 0.0f) || g.bound_power(v) * f < ind.cutoff) continue;
           // S = map − T: the object blocks the ray (T has none of it), or leaves it open and T
           // has this VPL at its changed power. Pair terms cover the rays both objects block.
@@ -800,9 +813,12 @@ void group_time(Report& report, const std::string& group, double seconds) {
 
 const char* quality_name(Quality q) {
   switch (q) {
-    case Quality::kDraft: return "draft";
-    case Quality::kPreview: return "preview";
-    case Quality::kProduction: return "production";
+    case Quality::kDraft:
+      return "draft";
+    case Quality::kPreview:
+      return "preview";
+    case Quality::kProduction:
+      return "production";
   }
   return "preview";
 }
@@ -811,7 +827,8 @@ IndirectPreset indirect_preset(const BakeOptions& options) {
   IndirectPreset p = preset_indirect(options.quality);
   if (options.photons > 0) p.photons = options.photons;
   if (options.virtual_lights > 0) p.virtual_lights = options.virtual_lights;
-  if (options.area_bias >= 0.0f && std::isfinite(options.area_bias)) p.area_bias = options.area_bias;
+  if (options.area_bias >= 0.0f && std::isfinite(options.area_bias))
+    p.area_bias = options.area_bias;
   return p;
 }
 
@@ -842,8 +859,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     if (l.radius > 0.0f && l.type == LightType::kDirectional) {
       report.add_decision(what, false, "directional light: a radius in metres has no angular size");
     } else if (l.radius > 0.0f) {
-      report.add_decision(what, true, "radius " + std::to_string(l.radius) + " m, " +
-                                          std::to_string(b.plans[i].samples) + " samples");
+      report.add_decision(what, true,
+                          "radius " + std::to_string(l.radius) + " m, " +
+                              std::to_string(b.plans[i].samples) + " samples");
     } else {
       report.add_decision(what, false,
                           b.plan ? "no lightRadius: a point source gives hard shadows"
@@ -851,10 +869,10 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     }
   }
   report.add_decision("emissive area lights", !b.emissive.empty(),
-                      b.emissive.empty() ? "no emissive static surfaces"
-                                         : std::to_string(b.emissive.triangle_count()) +
-                                               " emissive triangles, " +
-                                               std::to_string(b.area_samples) + " samples/texel");
+                      b.emissive.empty()
+                          ? "no emissive static surfaces"
+                          : std::to_string(b.emissive.triangle_count()) + " emissive triangles, " +
+                                std::to_string(b.area_samples) + " samples/texel");
   if (!b.indirect) {
     report.add_decision("indirect light", false, "turned off by the bake options");
   } else {
@@ -923,11 +941,13 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     for (auto& [key, img] : gm.pairs) {
       const float peak = peak_of(img, texels);
       if (peak <= kPairKeepFraction * b.output_step) continue;
-      report.add_decision("static shadow overlap " + scene.objects[size_t(cand.objects[size_t(key.first)])].name +
-                              " + " + scene.objects[size_t(cand.objects[size_t(key.second)])].name,
-                          false, "peak " + std::to_string(peak) +
-                                     ": static lights have no pair corrections in pack format 1; "
-                                     "where both are visible their overlap is darkened twice");
+      report.add_decision("static shadow overlap " +
+                              scene.objects[size_t(cand.objects[size_t(key.first)])].name + " + " +
+                              scene.objects[size_t(cand.objects[size_t(key.second)])].name,
+                          false,
+                          "peak " + std::to_string(peak) +
+                              ": static lights have no pair corrections in pack format 1; "
+                              "where both are visible their overlap is darkened twice");
     }
     report_triples(report, "static lights", gm);
     group_time(report, "static lights", seconds_since(ts));
@@ -955,8 +975,11 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       if (!b.plan || why.empty() || (ind.enabled && !bounds[o].empty())) {
         cand.add(int(o));
       } else {
-        pairs.push_back({{"light", light.name}, {"object", scene.objects[o].name}, {"kept", false},
-                         {"stage", "geometric"}, {"reason", why}});
+        pairs.push_back({{"light", light.name},
+                         {"object", scene.objects[o].name},
+                         {"kept", false},
+                         {"stage", "geometric"},
+                         {"reason", why}});
       }
     }
     const ObjectChanges changes = object_changes(b, scene, li, ind, cand, progress, report);
@@ -1026,7 +1049,8 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
         const FloatImage& sa = *shadow_map_of[size_t(kept_pairs[j].object_a)];
         const FloatImage& sb = *shadow_map_of[size_t(kept_pairs[j].object_b)];
         FloatImage& p = kept_pairs[j].map;
-        for (size_t i = 0; i < p.data.size(); ++i) p.data[i] = sa.data[i] + sb.data[i] - jm.shadow[j].data[i];
+        for (size_t i = 0; i < p.data.size(); ++i)
+          p.data[i] = sa.data[i] + sb.data[i] - jm.shadow[j].data[i];
       }
     }
     for (PairCorrectionMap& pc : kept_pairs) maps.pair_corrections.push_back(std::move(pc));
@@ -1034,9 +1058,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     group_time(report, light_name(scene, li), seconds_since(ts));
   }
   for (const nlohmann::json& p : pairs) {
-    report.add_decision("pair " + p["light"].get<std::string>() + " / " +
-                            p["object"].get<std::string>(),
-                        p["kept"].get<bool>(), p["reason"].get<std::string>());
+    report.add_decision(
+        "pair " + p["light"].get<std::string>() + " / " + p["object"].get<std::string>(),
+        p["kept"].get<bool>(), p["reason"].get<std::string>());
   }
   {
     std::lock_guard<std::mutex> lock(report.mutex());
@@ -1094,8 +1118,10 @@ FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& 
   if (!unknown.empty()) {
     std::string list;
     for (const std::string& u : unknown) list += (list.empty() ? "" : ", ") + u;
-    throw CookError("the state names what the scene does not have (or has not marked "
-                    "semiDynamic): " + list);
+    throw CookError(
+        "the state names what the scene does not have (or has not marked "
+        "semiDynamic): " +
+        list);
   }
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -1135,7 +1161,8 @@ FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& 
     };
     if (!b.static_emitters.empty()) add_group(-1, glm::vec3(1.0f));
     for (size_t li = 0; li < scene.lights.size(); ++li) {
-      if (scene.lights[li].semi_dynamic && max3(radiant[li]) > 0.0f) add_group(static_cast<int>(li), radiant[li]);
+      if (scene.lights[li].semi_dynamic && max3(radiant[li]) > 0.0f)
+        add_group(static_cast<int>(li), radiant[li]);
     }
     progress.end();
   }
@@ -1181,14 +1208,17 @@ FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& 
         for (size_t v = 0; v < pg.lights().size(); ++v) {
           glm::vec3 o, d;
           float tmax = 0.0f;
-          const float f = vpl_factor(pg.lights()[v], p, nrm, b.settings.area_bias, b.eps, &o, &d, &tmax);
+          const float f =
+              vpl_factor(pg.lights()[v], p, nrm, b.settings.area_bias, b.eps, &o, &d, &tmax);
           if (!(f > 0.0f) || pg.bound_power(v) * f < g.ind.cutoff) continue;
-          if (visible_segment(o, d, b.eps, tmax)) sum += (pg.lights()[v].power + g.change.delta[v]) * f;
+          if (visible_segment(o, d, b.eps, tmax))
+            sum += (pg.lights()[v].power + g.change.delta[v]) * f;
         }
         for (size_t i = 0; i < g.change.object_lights.size(); ++i) {
           glm::vec3 o, d;
           float tmax = 0.0f;
-          const float f = vpl_factor(g.change.object_lights[i], p, nrm, b.settings.area_bias, b.eps, &o, &d, &tmax);
+          const float f = vpl_factor(g.change.object_lights[i], p, nrm, b.settings.area_bias, b.eps,
+                                     &o, &d, &tmax);
           if (!(f > 0.0f) || g.change.object_bound[i] * f < g.ind.cutoff) continue;
           if (visible_segment(o, d, b.eps, tmax)) sum += g.change.object_lights[i].power * f;
         }

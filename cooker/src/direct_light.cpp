@@ -47,7 +47,9 @@ uint64_t sample_hash(uint64_t seed, uint64_t texel, uint64_t light, uint64_t sam
   return splitmix(splitmix(splitmix(splitmix(seed) ^ texel) ^ light) ^ sample);
 }
 
-float hash_to_unit(uint64_t h) { return static_cast<float>(h >> 40) * (1.0f / 16777216.0f); }
+float hash_to_unit(uint64_t h) {
+  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
+}
 
 float spot_attenuation(const Light& light, const glm::vec3& to_point_unit) {
   const float cos_outer = std::cos(light.outer_cone);
@@ -93,7 +95,8 @@ float irradiance_with_cone(const Light& light, const Cone& cone, const glm::vec3
   if (cos_theta <= 0.0f) return 0.0f;
   float e = cos_theta / (d2 + eps2) * range_window(light.range, d);
   if (light.type == LightType::kSpot) {
-    const float a = std::clamp(glm::dot(light.direction, -l) * cone.scale + cone.offset, 0.0f, 1.0f);
+    const float a =
+        std::clamp(glm::dot(light.direction, -l) * cone.scale + cone.offset, 0.0f, 1.0f);
     e *= a * a;
   }
   return e;
@@ -232,8 +235,9 @@ void EmissiveLights::sample(const glm::vec3& p, const glm::vec3& n, int samples,
   for (int i = 0; i < samples; ++i) {
     const uint64_t h = sample_hash(rng, 1, 0, static_cast<uint64_t>(i));
     const float u = (static_cast<float>(i) + hash_to_unit(h)) * inv_n;  // stratified in power
-    const size_t k = std::min(cdf_.size() - 1, static_cast<size_t>(std::upper_bound(
-                                                    cdf_.begin(), cdf_.end(), u) - cdf_.begin()));
+    const size_t k =
+        std::min(cdf_.size() - 1,
+                 static_cast<size_t>(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()));
     const Tri& tri = tris_[k];
     const float p_tri = cdf_[k] - (k > 0 ? cdf_[k - 1] : 0.0f);
     if (!(p_tri > 0.0f)) continue;

@@ -14,13 +14,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
-#include <string_view>
-#include <map>
-#include <set>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <limits>
+#include <map>
+#include <set>
+#include <string_view>
 
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/io.h"
@@ -35,12 +35,14 @@ constexpr const char* kEmissiveStrength = "KHR_materials_emissive_strength";
 // Extensions the cooker understands well enough that a file may require them. Others that only
 // affect appearance in ways the cooker ignores may still be *used*.
 const std::set<std::string>& supported_required() {
-  static const std::set<std::string> s = {kDraco, kLights, kEmissiveStrength,
-                                          "KHR_materials_unlit", "KHR_texture_transform"};
+  static const std::set<std::string> s = {kDraco, kLights, kEmissiveStrength, "KHR_materials_unlit",
+                                          "KHR_texture_transform"};
   return s;
 }
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+std::string quoted(const std::string& s) {
+  return "'" + s + "'";
+}
 
 std::string node_label(const tinygltf::Model& model, int node) {
   const std::string& n = model.nodes[size_t(node)].name;
@@ -66,23 +68,32 @@ float srgb_to_linear(float c) {
 int component_size(int type) {
   switch (type) {
     case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return 1;
     case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return 2;
     case TINYGLTF_COMPONENT_TYPE_INT:
     case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
-    default: return 0;
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+      return 4;
+    default:
+      return 0;
   }
 }
 
 int component_count(int type) {
   switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    default: return 0;
+    case TINYGLTF_TYPE_SCALAR:
+      return 1;
+    case TINYGLTF_TYPE_VEC2:
+      return 2;
+    case TINYGLTF_TYPE_VEC3:
+      return 3;
+    case TINYGLTF_TYPE_VEC4:
+      return 4;
+    default:
+      return 0;
   }
 }
 
@@ -94,7 +105,8 @@ double read_component(const unsigned char* p, int type, bool normalized) {
       std::memcpy(&f, p, 4);
       return f;
     }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return normalized ? p[0] / 255.0 : p[0];
     case TINYGLTF_COMPONENT_TYPE_BYTE: {
       const auto v = static_cast<int8_t>(p[0]);
       return normalized ? std::max(v / 127.0, -1.0) : v;
@@ -119,7 +131,8 @@ double read_component(const unsigned char* p, int type, bool normalized) {
       std::memcpy(&v, p, 4);
       return v;
     }
-    default: return 0.0;
+    default:
+      return 0.0;
   }
 }
 
@@ -142,7 +155,8 @@ std::vector<double> read_accessor(const tinygltf::Model& model, int index, int w
     // All zeros (glTF 3.6.2.3): nothing in the file bounds the count, so bound it here rather
     // than let a hostile count exhaust memory.
     if (count > (size_t(1) << 24))
-      throw CookError(label + " has no bufferView and an absurd count (" + std::to_string(count) + ")");
+      throw CookError(label + " has no bufferView and an absurd count (" + std::to_string(count) +
+                      ")");
     return std::vector<double>(count * size_t(comps), 0.0);
   }
   if (size_t(acc.bufferView) >= model.bufferViews.size())
@@ -171,8 +185,8 @@ std::vector<double> read_accessor(const tinygltf::Model& model, int index, int w
   for (size_t i = 0; i < count; ++i) {
     const unsigned char* p = data.data() + start + i * stride;
     for (int c = 0; c < comps; ++c)
-      out[i * size_t(comps) + size_t(c)] = read_component(p + c * csize, acc.componentType,
-                                                          acc.normalized);
+      out[i * size_t(comps) + size_t(c)] =
+          read_component(p + c * csize, acc.componentType, acc.normalized);
   }
   return out;
 }
@@ -219,7 +233,8 @@ RawPrimitive read_plain(const tinygltf::Model& model, const tinygltf::Primitive&
     if (size_t(prim.indices) < model.accessors.size()) {
       const int ct = model.accessors[size_t(prim.indices)].componentType;
       if (ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-          ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT && ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+          ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+          ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
         throw CookError(label + " indices accessor " + std::to_string(prim.indices) +
                         " is not an unsigned integer type");
     }
@@ -266,8 +281,9 @@ RawPrimitive read_draco(const tinygltf::Model& model, const tinygltf::Value& ext
     const tinygltf::Value& id = attrs.Get(name);
     if (!id.IsInt()) throw CookError(dl + ": attribute " + name + " id is not an integer");
     const draco::PointAttribute* a = mesh->GetAttributeByUniqueId(uint32_t(id.GetNumberAsInt()));
-    if (!a) throw CookError(dl + ": attribute " + name + " id " +
-                            std::to_string(id.GetNumberAsInt()) + " is not in the Draco data");
+    if (!a)
+      throw CookError(dl + ": attribute " + name + " id " + std::to_string(id.GetNumberAsInt()) +
+                      " is not in the Draco data");
     if (a->num_components() != comps)
       throw CookError(dl + ": attribute " + std::string(name) + " has " +
                       std::to_string(int(a->num_components())) + " components, expected " +
@@ -352,9 +368,12 @@ void check_json_depth(const char* text, size_t size, const std::string& name) {
   for (size_t i = 0; i < size; ++i) {
     const char c = text[i];
     if (in_string) {
-      if (escaped) escaped = false;
-      else if (c == '\\') escaped = true;
-      else if (c == '"') in_string = false;
+      if (escaped)
+        escaped = false;
+      else if (c == '\\')
+        escaped = true;
+      else if (c == '"')
+        in_string = false;
     } else if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
@@ -378,11 +397,13 @@ bool draco_indices_patch(const uint8_t* data, size_t size, bool glb, std::vector
   const size_t text_size = glb ? size_t(get_u32(data + 12)) : size;
   if (std::string_view(text, text_size).find(kDraco) == std::string_view::npos) return false;
   nlohmann::json doc = nlohmann::json::parse(text, text + text_size, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object() || !doc.contains("meshes") || !doc["meshes"].is_array())
+  if (doc.is_discarded() || !doc.is_object() || !doc.contains("meshes") ||
+      !doc["meshes"].is_array())
     return false;
   bool changed = false;
   for (nlohmann::json& mesh : doc["meshes"]) {
-    if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
+    if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array())
+      continue;
     for (nlohmann::json& prim : mesh["primitives"]) {
       if (prim.is_object() && prim.contains("indices") && prim.contains("extensions") &&
           prim["extensions"].is_object() && prim["extensions"].contains(kDraco)) {
@@ -445,9 +466,9 @@ glm::mat4 Importer::local_matrix(int node) const {
   } else {
     glm::mat4 t(1.0f), r(1.0f), s(1.0f);
     if (n.translation.size() == 3)
-      t = glm::translate(glm::mat4(1.0f), glm::vec3(float(n.translation[0]),
-                                                    float(n.translation[1]),
-                                                    float(n.translation[2])));
+      t = glm::translate(
+          glm::mat4(1.0f),
+          glm::vec3(float(n.translation[0]), float(n.translation[1]), float(n.translation[2])));
     if (n.rotation.size() == 4) {
       glm::quat q(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]),
                   float(n.rotation[2]));
@@ -472,8 +493,8 @@ void Importer::visit(int node, const glm::mat4& parent, int depth) {
   if (node < 0 || size_t(node) >= model_.nodes.size())
     throw CookError(err("reference to missing node " + std::to_string(node)));
   if (visited_[size_t(node)])
-    throw CookError(err(node_label(model_, node) +
-                        " is reached twice (a cycle or a node with two parents)"));
+    throw CookError(
+        err(node_label(model_, node) + " is reached twice (a cycle or a node with two parents)"));
   if (depth > 1024) throw CookError(err("node hierarchy is deeper than 1024 levels"));
   visited_[size_t(node)] = 1;
   const glm::mat4 world = parent * local_matrix(node);
@@ -553,7 +574,8 @@ void Importer::read_materials() {
     if (ext != gm.extensions.end() && ext->second.IsObject() &&
         ext->second.Has("emissiveStrength") && ext->second.Get("emissiveStrength").IsNumber())
       m.emissive *= float(ext->second.Get("emissiveStrength").GetNumberAsDouble());
-    if (!finite(m.albedo) || !finite(m.emissive) || glm::any(glm::lessThan(m.albedo, glm::vec3(0))) ||
+    if (!finite(m.albedo) || !finite(m.emissive) ||
+        glm::any(glm::lessThan(m.albedo, glm::vec3(0))) ||
         glm::any(glm::lessThan(m.emissive, glm::vec3(0))))
       throw CookError(err("material " + std::to_string(i) + " " + quoted(gm.name) +
                           " has a negative or non-finite colour"));
@@ -580,13 +602,16 @@ void Importer::read_materials() {
 bool triangle_list(int mode, const std::vector<uint32_t>& in, std::vector<uint32_t>* out) {
   out->clear();
   if (mode == TINYGLTF_MODE_TRIANGLES || mode < 0) {
-    for (size_t i = 0; i + 2 < in.size(); i += 3) out->insert(out->end(), {in[i], in[i + 1], in[i + 2]});
+    for (size_t i = 0; i + 2 < in.size(); i += 3)
+      out->insert(out->end(), {in[i], in[i + 1], in[i + 2]});
     return true;
   }
   if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
     for (size_t i = 0; i + 2 < in.size(); ++i) {
-      if (i % 2 == 0) out->insert(out->end(), {in[i], in[i + 1], in[i + 2]});
-      else out->insert(out->end(), {in[i + 1], in[i], in[i + 2]});
+      if (i % 2 == 0)
+        out->insert(out->end(), {in[i], in[i + 1], in[i + 2]});
+      else
+        out->insert(out->end(), {in[i + 1], in[i], in[i + 2]});
     }
     return true;
   }
@@ -600,8 +625,8 @@ bool triangle_list(int mode, const std::vector<uint32_t>& in, std::vector<uint32
 void Importer::add_mesh_node(int node, const glm::mat4& world) {
   const tinygltf::Node& n = model_.nodes[size_t(node)];
   if (size_t(n.mesh) >= model_.meshes.size())
-    throw CookError(err(node_label(model_, node) + " refers to missing mesh " +
-                        std::to_string(n.mesh)));
+    throw CookError(
+        err(node_label(model_, node) + " refers to missing mesh " + std::to_string(n.mesh)));
   const bool semi = extras_flag(n.extras, "semiDynamic");
   int object = -1;
   if (semi) {
@@ -676,25 +701,29 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
     mi.object = object;
     if (prim.material >= 0) {
       if (size_t(prim.material) >= model_.materials.size())
-        throw CookError(err(label + " refers to missing material " +
-                            std::to_string(prim.material)));
+        throw CookError(
+            err(label + " refers to missing material " + std::to_string(prim.material)));
       mi.material = prim.material;
     } else {
       mi.material = default_material_;
     }
     mi.positions.resize(nv);
-    for (size_t i = 0; i < nv; ++i) mi.positions[i] = glm::vec3(world * glm::vec4(raw.positions[i], 1));
+    for (size_t i = 0; i < nv; ++i)
+      mi.positions[i] = glm::vec3(world * glm::vec4(raw.positions[i], 1));
     // Drop zero-area triangles; the threshold is relative to the primitive's size.
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    for (const auto& q : mi.positions) { lo = glm::min(lo, q); hi = glm::max(hi, q); }
+    for (const auto& q : mi.positions) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
     const float diag = glm::length(hi - lo);
     const float min_cross = 1e-12f * diag * diag;
     std::vector<uint32_t> kept;
     for (size_t t = 0; t + 2 < tris.size(); t += 3) {
       uint32_t a = tris[t], b = tris[t + 1], c = tris[t + 2];
       if (mirrored) std::swap(b, c);  // keep front faces front (glTF 3.7.4)
-      const glm::vec3 cr = glm::cross(mi.positions[b] - mi.positions[a],
-                                      mi.positions[c] - mi.positions[a]);
+      const glm::vec3 cr =
+          glm::cross(mi.positions[b] - mi.positions[a], mi.positions[c] - mi.positions[a]);
       if (!(glm::length(cr) > min_cross)) continue;
       kept.insert(kept.end(), {a, b, c});
     }
@@ -702,7 +731,8 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
       throw CookError(err(label + " has only zero-area triangles (" +
                           std::to_string(tris.size() / 3) + " triangles)"));
     if (kept.size() != tris.size())
-      scene_.notes.push_back(label + ": dropped " + std::to_string((tris.size() - kept.size()) / 3) +
+      scene_.notes.push_back(label + ": dropped " +
+                             std::to_string((tris.size() - kept.size()) / 3) +
                              " zero-area triangles");
     if (!raw.normals.empty()) {
       mi.normals.resize(nv);
@@ -721,9 +751,11 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
       if (need) {
         for (size_t t = 0; t < mi.indices.size(); t += 3) {
           const uint32_t a = mi.indices[t], b = mi.indices[t + 1], c = mi.indices[t + 2];
-          const glm::vec3 cr = glm::cross(mi.positions[b] - mi.positions[a],
-                                          mi.positions[c] - mi.positions[a]);
-          face_sum[a] += cr; face_sum[b] += cr; face_sum[c] += cr;
+          const glm::vec3 cr =
+              glm::cross(mi.positions[b] - mi.positions[a], mi.positions[c] - mi.positions[a]);
+          face_sum[a] += cr;
+          face_sum[b] += cr;
+          face_sum[c] += cr;
         }
         for (size_t i = 0; i < nv; ++i)
           if (mi.normals[i] == glm::vec3(0.0f)) {
@@ -765,22 +797,28 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
     throw CookError(err(node_label(model_, node) + ": " + kLights + " needs a light index"));
   const int li = ext->second.Get("light").GetNumberAsInt();
   if (li < 0 || size_t(li) >= model_.lights.size())
-    throw CookError(err(node_label(model_, node) + " refers to missing light " + std::to_string(li)));
+    throw CookError(
+        err(node_label(model_, node) + " refers to missing light " + std::to_string(li)));
   const tinygltf::Light& gl = model_.lights[size_t(li)];
   const std::string label = node_label(model_, node) + " light " + std::to_string(li);
   Light l;
   l.name = n.name;
   l.node_index = node;
-  if (gl.type == "point") l.type = LightType::kPoint;
-  else if (gl.type == "spot") l.type = LightType::kSpot;
-  else if (gl.type == "directional") l.type = LightType::kDirectional;
-  else throw CookError(err(label + " has unknown type " + quoted(gl.type)));
+  if (gl.type == "point")
+    l.type = LightType::kPoint;
+  else if (gl.type == "spot")
+    l.type = LightType::kSpot;
+  else if (gl.type == "directional")
+    l.type = LightType::kDirectional;
+  else
+    throw CookError(err(label + " has unknown type " + quoted(gl.type)));
   l.position = glm::vec3(world * glm::vec4(0, 0, 0, 1));
   const glm::vec3 d = glm::mat3(world) * glm::vec3(0, 0, -1);
   if (!(glm::length(d) > 0.0f))
     throw CookError(err(label + ": the node's transform collapses the light direction"));
   l.direction = glm::normalize(d);
-  if (gl.color.size() == 3) l.color = glm::vec3(float(gl.color[0]), float(gl.color[1]), float(gl.color[2]));
+  if (gl.color.size() == 3)
+    l.color = glm::vec3(float(gl.color[0]), float(gl.color[1]), float(gl.color[2]));
   l.intensity = float(gl.intensity);
   l.range = float(gl.range);
   l.inner_cone = float(gl.spot.innerConeAngle);
@@ -793,9 +831,8 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
     throw CookError(err(label + " has a negative or non-finite range"));
   // The schema asks inner < outer, but exporters write inner == outer for a hard-edged cone
   // (Blender, spot blend 0); the falloff handles it (a step at the edge), so it is accepted.
-  if (l.type == LightType::kSpot &&
-      !(l.inner_cone >= 0 && l.inner_cone <= l.outer_cone && l.outer_cone > 0 &&
-        l.outer_cone <= 1.5707964f))
+  if (l.type == LightType::kSpot && !(l.inner_cone >= 0 && l.inner_cone <= l.outer_cone &&
+                                      l.outer_cone > 0 && l.outer_cone <= 1.5707964f))
     throw CookError(err(label + ": spot cone angles need 0 <= inner <= outer <= pi/2, outer > 0"));
   l.semi_dynamic = extras_flag(n.extras, "semiDynamic");
   if (n.extras.IsObject() && n.extras.Has("lightRadius")) {
@@ -886,8 +923,9 @@ Scene import_gltf_memory(const uint8_t* data, size_t size, const std::string& na
   std::string error, warning;
   const bool ok =
       glb ? loader.LoadBinaryFromMemory(&model, &error, &warning, data, uint32_t(size), base_dir)
-          : loader.LoadASCIIFromString(&model, &error, &warning, reinterpret_cast<const char*>(data),
-                                       uint32_t(size), base_dir);
+          : loader.LoadASCIIFromString(&model, &error, &warning,
+                                       reinterpret_cast<const char*>(data), uint32_t(size),
+                                       base_dir);
   if (!ok) {
     while (!error.empty() && (error.back() == '\n' || error.back() == '\r')) error.pop_back();
     throw CookError(name + ": invalid glTF" + (glb ? " binary" : "") + ": " +

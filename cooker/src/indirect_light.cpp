@@ -12,12 +12,21 @@ namespace lightpatch::cooker {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
-constexpr uint32_t kChunk = 512;  // photons (or paths) per work item
+constexpr uint32_t kChunk = 512;              // photons (or paths) per work item
 constexpr float kObjectLightSparsity = 2.0f;  // photons per object VPL / photons per static VPL
 // Random-number slots of one photon's bounce (sample_hash's last argument).
-enum Slot : uint64_t { kEmit = 0, kEmitDir = 1, kRoulette = 2, kBounce = 3, kAltRoulette = 4, kAltBounce = 5 };
+enum Slot : uint64_t {
+  kEmit = 0,
+  kEmitDir = 1,
+  kRoulette = 2,
+  kBounce = 3,
+  kAltRoulette = 4,
+  kAltBounce = 5
+};
 
-float max3(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
+float max3(const glm::vec3& v) {
+  return std::max({v.x, v.y, v.z});
+}
 
 void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
   const float sign = std::copysign(1.0f, w.z);
@@ -27,8 +36,12 @@ void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
   b = glm::vec3(c, sign + w.y * w.y * a, -w.y);
 }
 
-float unit(uint64_t h) { return hash_to_unit(h); }
-float unit2(uint64_t h) { return hash_to_unit(sample_hash(h, 1, 2, 3)); }
+float unit(uint64_t h) {
+  return hash_to_unit(h);
+}
+float unit2(uint64_t h) {
+  return hash_to_unit(sample_hash(h, 1, 2, 3));
+}
 
 glm::vec3 cosine_dir(const glm::vec3& n, uint64_t h) {
   const float u = unit(h), v = unit2(h);
@@ -82,8 +95,11 @@ struct Clusters {
 
 int nearest_seed(const KdTree& tree, const std::vector<glm::vec3>& normals, const glm::vec3& p,
                  const glm::vec3& n, float normal_cos) {
-  int best = tree.nearest(p, [&](int i) { return glm::dot(normals[static_cast<size_t>(i)], n) >= normal_cos; });
-  if (best < 0) best = tree.nearest(p, [&](int i) { return glm::dot(normals[static_cast<size_t>(i)], n) > 0.0f; });
+  int best = tree.nearest(
+      p, [&](int i) { return glm::dot(normals[static_cast<size_t>(i)], n) >= normal_cos; });
+  if (best < 0)
+    best =
+        tree.nearest(p, [&](int i) { return glm::dot(normals[static_cast<size_t>(i)], n) > 0.0f; });
   if (best < 0) best = tree.nearest(p, [](int) { return true; });
   return best;
 }
@@ -109,7 +125,8 @@ Clusters cluster_photons(const std::vector<PhotonDeposit>& deposits, size_t coun
   parallel_for(chunks, threads, [&](int c) {
     const size_t first = static_cast<size_t>(c) * kChunk;
     for (size_t i = first; i < std::min(n, first + kChunk); ++i) {
-      out.assignment[i] = nearest_seed(out.tree, out.normals, deposits[i].position, deposits[i].normal, normal_cos);
+      out.assignment[i] =
+          nearest_seed(out.tree, out.normals, deposits[i].position, deposits[i].normal, normal_cos);
     }
   });
   const size_t k = top.size();
@@ -160,8 +177,12 @@ Emitter light_emitter(const Light& light, const glm::vec3& scale, const glm::vec
   e.light = &light;
   e.scale = scale;
   switch (light.type) {
-    case LightType::kPoint: e.flux = scale * (4.0f * kPi); break;
-    case LightType::kSpot: e.flux = scale * spot_solid_angle(light); break;
+    case LightType::kPoint:
+      e.flux = scale * (4.0f * kPi);
+      break;
+    case LightType::kSpot:
+      e.flux = scale * spot_solid_angle(light);
+      break;
     case LightType::kDirectional: {
       const float r = beam_radius(bounds_min, bounds_max);
       e.flux = scale * (kPi * r * r);
@@ -304,14 +325,16 @@ PhotonGroup::PhotonGroup(const Scene& scene, const Tracer& tracer, std::vector<E
   const size_t k = std::clamp<size_t>(static_cast<size_t>(std::max(1, virtual_lights)), 1,
                                       std::max<size_t>(1, deposits_.size()));
   min_area_ = std::max(std::pow(1e-3f * scene.scale(), 2.0f), eps_ * eps_);
-  Clusters clusters = cluster_photons(deposits_, k, settings_.normal_cos, threads_, min_area_, 0.0f);
+  Clusters clusters =
+      cluster_photons(deposits_, k, settings_.normal_cos, threads_, min_area_, 0.0f);
   lights_ = std::move(clusters.lights);
   cluster_ = std::move(clusters.assignment);
   seeds_ = std::move(clusters.tree);
   seed_normals_ = std::move(clusters.normals);
   mean_area_ = clusters.mean_area;
   photons_per_light_ =
-      lights_.empty() ? 1.0f : static_cast<float>(deposits_.size()) / static_cast<float>(lights_.size());
+      lights_.empty() ? 1.0f
+                      : static_cast<float>(deposits_.size()) / static_cast<float>(lights_.size());
   float mean = 0.0f;
   for (const VirtualLight& v : lights_) mean += max3(v.power);
   mean = lights_.empty() ? 0.0f : mean / static_cast<float>(lights_.size());
@@ -331,12 +354,14 @@ glm::vec3 PhotonGroup::albedo_at(const Hit& h) const {
       const size_t i0 = mesh.indices[3 * static_cast<size_t>(h.triangle)];
       const size_t i1 = mesh.indices[3 * static_cast<size_t>(h.triangle) + 1];
       const size_t i2 = mesh.indices[3 * static_cast<size_t>(h.triangle) + 2];
-      const glm::vec2 uv = mesh.uv0[i0] * (1.0f - h.u - h.v) + mesh.uv0[i1] * h.u + mesh.uv0[i2] * h.v;
+      const glm::vec2 uv =
+          mesh.uv0[i0] * (1.0f - h.u - h.v) + mesh.uv0[i1] * h.u + mesh.uv0[i2] * h.v;
       if (tex.width > 0 && tex.height > 0 && std::isfinite(uv.x) && std::isfinite(uv.y) &&
           tex.linear_rgb.size() == size_t(tex.width) * size_t(tex.height)) {
         const float fx = uv.x - std::floor(uv.x), fy = uv.y - std::floor(uv.y);
         const int x = std::min(tex.width - 1, static_cast<int>(fx * static_cast<float>(tex.width)));
-        const int y = std::min(tex.height - 1, static_cast<int>(fy * static_cast<float>(tex.height)));
+        const int y =
+            std::min(tex.height - 1, static_cast<int>(fy * static_cast<float>(tex.height)));
         a *= tex.linear_rgb[size_t(y) * size_t(tex.width) + size_t(x)];
       }
     }
@@ -349,9 +374,10 @@ glm::vec3 PhotonGroup::albedo_at(const Hit& h) const {
 void PhotonGroup::trace_path(uint32_t path, Trace& out) const {
   const uint64_t h0 = sample_hash(seed_, path, 0, kEmit);
   const float u = (static_cast<float>(path) + unit(h0)) / static_cast<float>(emitted_);
-  const size_t ei = std::min(emitter_cdf_.size() - 1,
-                             static_cast<size_t>(std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u) -
-                                                 emitter_cdf_.begin()));
+  const size_t ei =
+      std::min(emitter_cdf_.size() - 1,
+               static_cast<size_t>(std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u) -
+                                   emitter_cdf_.begin()));
   const float pe = emitter_cdf_[ei] - (ei > 0 ? emitter_cdf_[ei - 1] : 0.0f);
   Path p{static_cast<uint32_t>(out.segments.size()), 0};
   out.crossing_count.push_back(0);
@@ -418,7 +444,8 @@ void PhotonGroup::trace_path(uint32_t path, Trace& out) const {
       for (int j = 0; j < k; ++j) {
         const int o = hits[static_cast<size_t>(j)];
         bool seen = false;
-        for (size_t x = path_crossing0; x < out.crossings.size(); ++x) seen |= out.crossings[x].object == o;
+        for (size_t x = path_crossing0; x < out.crossings.size(); ++x)
+          seen |= out.crossings[x].object == o;
         if (seen) continue;
         out.crossings.push_back({path, seg_index, o});
         out.crossing_count.back()++;
@@ -467,7 +494,8 @@ Hit PhotonGroup::intersect_present(const glm::vec3& o, const glm::vec3& d, float
   return tracer_.intersect(o, d, tmin, tmax, false);
 }
 
-bool PhotonGroup::continue_path(uint32_t path, const Segment& s, const std::vector<uint8_t>& present,
+bool PhotonGroup::continue_path(uint32_t path, const Segment& s,
+                                const std::vector<uint8_t>& present,
                                 std::vector<Deposit>& to_static, std::vector<Deposit>& to_objects,
                                 std::vector<int>& objects_hit) const {
   Hit h = intersect_present(s.origin, s.dir, s.tmin, s.tmax, present);
@@ -500,7 +528,6 @@ bool PhotonGroup::continue_path(uint32_t path, const Segment& s, const std::vect
   return true;
 }
 
-
 int PhotonGroup::assign(const glm::vec3& p, const glm::vec3& n) const {
   return nearest_seed(seeds_, seed_normals_, p, n, settings_.normal_cos);
 }
@@ -524,7 +551,8 @@ PhotonGroup::Change PhotonGroup::change(const std::vector<uint8_t>& present) con
     for (uint32_t p = first; p < std::min(n, first + kChunk); ++p) {
       uint32_t seg = std::numeric_limits<uint32_t>::max();
       for (uint32_t x = path_crossings_[p]; x < path_crossings_[p + 1]; ++x) {
-        if (present[static_cast<size_t>(crossings_[x].object)]) seg = std::min(seg, crossings_[x].segment);
+        if (present[static_cast<size_t>(crossings_[x].object)])
+          seg = std::min(seg, crossings_[x].segment);
       }
       if (seg == std::numeric_limits<uint32_t>::max()) continue;
       to_static.clear();
@@ -537,24 +565,28 @@ PhotonGroup::Change PhotonGroup::change(const std::vector<uint8_t>& present) con
       const Path& path = paths_[p];
       for (uint32_t s = seg; s < path.first_segment + path.segment_count; ++s) {
         const int32_t d = segments_[s].deposit;
-        if (d >= 0) o.removed.emplace_back(cluster_[static_cast<size_t>(d)], deposits_[static_cast<size_t>(d)].power);
+        if (d >= 0)
+          o.removed.emplace_back(cluster_[static_cast<size_t>(d)],
+                                 deposits_[static_cast<size_t>(d)].power);
       }
-      for (const Deposit& d : to_static) o.added.emplace_back(assign(d.position, d.normal), d.power);
+      for (const Deposit& d : to_static)
+        o.added.emplace_back(assign(d.position, d.normal), d.power);
     }
   });
   std::vector<std::vector<Deposit>> per_object(scene_.objects.size());
   for (const Out& o : outs) {
     for (const auto& [k, pw] : o.removed) c.delta[static_cast<size_t>(k)] -= pw;
     for (const auto& [k, pw] : o.added) c.delta[static_cast<size_t>(k)] += pw;
-    for (size_t i = 0; i < o.on_objects.size(); ++i) per_object[static_cast<size_t>(o.owner[i])].push_back(o.on_objects[i]);
+    for (size_t i = 0; i < o.on_objects.size(); ++i)
+      per_object[static_cast<size_t>(o.owner[i])].push_back(o.on_objects[i]);
   }
   for (size_t obj = 0; obj < per_object.size(); ++obj) {
     const std::vector<Deposit>& d = per_object[obj];
     if (d.empty()) continue;
     // Half the static VPLs' density: the object's bounce is a change to the light's indirect
     // light, usually small next to it, and each of these VPLs adds a ray per texel.
-    const size_t want =
-        static_cast<size_t>(std::ceil(static_cast<float>(d.size()) / (kObjectLightSparsity * photons_per_light_)));
+    const size_t want = static_cast<size_t>(
+        std::ceil(static_cast<float>(d.size()) / (kObjectLightSparsity * photons_per_light_)));
     const size_t k = std::clamp<size_t>(want, std::min<size_t>(2, d.size()), d.size());
     const size_t first = c.object_lights.size();
     Clusters cl = cluster_photons(d, k, settings_.normal_cos, threads_, min_area_, mean_area_);

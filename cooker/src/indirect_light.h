@@ -73,9 +73,9 @@ class PhotonGroup {
   // Traces `photons` photons from `emitters` (counts proportional to flux) with every object
   // absent and makes about `virtual_lights` VPLs. `track_objects`: record which objects each
   // segment crosses (needed for change()). `key` separates the random streams of groups.
-  PhotonGroup(const Scene& scene, const Tracer& tracer, std::vector<Emitter> emitters,
-              int photons, int virtual_lights, const IndirectSettings& settings, uint64_t seed,
-              uint64_t key, int threads, bool track_objects);
+  PhotonGroup(const Scene& scene, const Tracer& tracer, std::vector<Emitter> emitters, int photons,
+              int virtual_lights, const IndirectSettings& settings, uint64_t seed, uint64_t key,
+              int threads, bool track_objects);
 
   const std::vector<VirtualLight>& lights() const { return lights_; }
   // Early-out power bound of static VPL i (max channel; at least the mean VPL power, so that a
@@ -91,9 +91,9 @@ class PhotonGroup {
 
   // What a set of present objects changes. Objects with `present[o] == 0` stay absent.
   struct Change {
-    std::vector<glm::vec3> delta;          // per static VPL: power added minus power removed
+    std::vector<glm::vec3> delta;  // per static VPL: power added minus power removed
     std::vector<VirtualLight> object_lights;
-    std::vector<int> owner;                // object of each object light
+    std::vector<int> owner;  // object of each object light
     // Early-out power bound of each object light, times K / (the owner's light count): against
     // the group's per-VPL cutoff (a K-th of a texel's skip budget) an object's lights share the
     // whole budget among themselves.
@@ -106,9 +106,9 @@ class PhotonGroup {
   struct Segment {
     glm::vec3 origin, dir;
     float tmin, tmax;
-    glm::vec3 power;     // carried along the segment
-    float range;         // > 0: the light's range window applies at the hit (first segment)
-    int32_t deposit;     // index of the deposit at its end, -1 if it left the scene
+    glm::vec3 power;  // carried along the segment
+    float range;      // > 0: the light's range window applies at the hit (first segment)
+    int32_t deposit;  // index of the deposit at its end, -1 if it left the scene
   };
   struct Crossing {
     uint32_t path;
@@ -148,7 +148,7 @@ class PhotonGroup {
   std::vector<Path> paths_;
   std::vector<Segment> segments_;
   std::vector<Deposit> deposits_;
-  std::vector<Crossing> crossings_;  // path order, then segment order
+  std::vector<Crossing> crossings_;       // path order, then segment order
   std::vector<uint32_t> path_crossings_;  // per path: first index into crossings_ (size paths+1)
   std::vector<float> crossing_power_;
 

@@ -18,7 +18,9 @@ namespace lightpatch::cooker {
 
 namespace {
 
-std::string errno_text() { return std::strerror(errno); }
+std::string errno_text() {
+  return std::strerror(errno);
+}
 
 std::string directory_of(const std::string& path) {
   const size_t slash = path.find_last_of('/');
@@ -94,7 +96,8 @@ std::vector<uint8_t> read_file(const std::string& path) {
   std::vector<uint8_t> out;
   uint8_t buffer[1 << 16];
   size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) out.insert(out.end(), buffer, buffer + n);
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0)
+    out.insert(out.end(), buffer, buffer + n);
   const bool error = std::ferror(f) != 0;
   std::fclose(f);
   if (error) throw CookError("cannot read '" + path + "': read error");
@@ -152,9 +155,12 @@ FloatImage read_pfm(const std::string& path) {
   };
   const std::string magic = token();
   int channels = 0;
-  if (magic == "PF") channels = 3;
-  else if (magic == "Pf") channels = 1;
-  else throw bad("missing 'PF' or 'Pf' signature");
+  if (magic == "PF")
+    channels = 3;
+  else if (magic == "Pf")
+    channels = 1;
+  else
+    throw bad("missing 'PF' or 'Pf' signature");
   const std::string ws = token(), hs = token(), ss = token();
   char* end = nullptr;
   const long w = std::strtol(ws.c_str(), &end, 10);
@@ -162,7 +168,8 @@ FloatImage read_pfm(const std::string& path) {
   const long h = std::strtol(hs.c_str(), &end, 10);
   if (hs.empty() || *end) throw bad("bad height '" + hs + "'");
   const double scale = std::strtod(ss.c_str(), &end);
-  if (ss.empty() || *end || !std::isfinite(scale) || scale == 0.0) throw bad("bad scale '" + ss + "'");
+  if (ss.empty() || *end || !std::isfinite(scale) || scale == 0.0)
+    throw bad("bad scale '" + ss + "'");
   if (w <= 0 || h <= 0 || w > 65536 || h > 65536) throw bad("size out of range");
   // Exactly one whitespace character separates the header from the data.
   if (pos >= bytes.size() || !std::isspace(bytes[pos])) throw bad("truncated header");

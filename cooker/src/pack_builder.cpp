@@ -18,7 +18,8 @@
 namespace lightpatch::cooker {
 
 using namespace pack;
-static_assert(std::endian::native == std::endian::little, "the pack writer assumes a little-endian host");
+static_assert(std::endian::native == std::endian::little,
+              "the pack writer assumes a little-endian host");
 
 namespace {
 
@@ -29,7 +30,9 @@ struct MapJob {
   std::string what;
 };
 
-float max3(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
+float max3(const glm::vec3& v) {
+  return std::max({v.x, v.y, v.z});
+}
 
 nlohmann::json error_json(const EncodingError& e) {
   nlohmann::json j;
@@ -45,8 +48,9 @@ void check_map(const FloatImage& m, const Layout& layout, int channels_a, int ch
       (m.channels != channels_a && m.channels != channels_b) ||
       m.data.size() != size_t(m.width) * m.height * m.channels) {
     throw CookError(what + ": " + std::to_string(m.width) + "x" + std::to_string(m.height) + "x" +
-                    std::to_string(m.channels) + " does not match the " + std::to_string(layout.width) +
-                    "x" + std::to_string(layout.height) + " light map");
+                    std::to_string(m.channels) + " does not match the " +
+                    std::to_string(layout.width) + "x" + std::to_string(layout.height) +
+                    " light map");
   }
 }
 
@@ -56,8 +60,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                                 const PackOptions& options, Report& report) {
   if (layout.width <= 0 || layout.height <= 0 || layout.width > int(kMaxLightmapSize) ||
       layout.height > int(kMaxLightmapSize)) {
-    throw CookError("light-map size " + std::to_string(layout.width) + "x" + std::to_string(layout.height) +
-                    " out of range");
+    throw CookError("light-map size " + std::to_string(layout.width) + "x" +
+                    std::to_string(layout.height) + " out of range");
   }
   if (options.max_atlas_size < kMinAtlasSize || options.max_atlas_size > int(kMaxAtlasSize) ||
       (options.max_atlas_size & (options.max_atlas_size - 1)) != 0) {
@@ -139,7 +143,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     if (s.light < 0 || size_t(s.light) >= maps.lights.size() || s.object < 0 ||
         size_t(s.object) >= scene.objects.size()) {
       throw CookError("shadow map (light " + std::to_string(s.light) + ", object " +
-                      std::to_string(s.object) + ") refers to a light or object that does not exist");
+                      std::to_string(s.object) +
+                      ") refers to a light or object that does not exist");
     }
     if (k > 0 && shadows[k - 1]->light == s.light && shadows[k - 1]->object == s.object) {
       throw CookError("two shadow maps for light " + std::to_string(s.light) + ", object " +
@@ -173,8 +178,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                       std::to_string(p.object_a) + ", " + std::to_string(p.object_b) +
                       ") refers to a light or objects that do not exist, or not in order");
     }
-    if (k > 0 && corrections[k - 1]->light == p.light && corrections[k - 1]->object_a == p.object_a &&
-        corrections[k - 1]->object_b == p.object_b) {
+    if (k > 0 && corrections[k - 1]->light == p.light &&
+        corrections[k - 1]->object_a == p.object_a && corrections[k - 1]->object_b == p.object_b) {
       throw CookError("two pair corrections for one light and pair");
     }
     MapJob j;
@@ -185,16 +190,17 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.prototype.object_b = p.object_b;
     j.prototype.weight = authored[size_t(p.light)];
     j.threshold = light_threshold[size_t(p.light)];
-    j.what = "overlap correction of objects '" + scene.objects[size_t(p.object_a)].name + "' and '" +
-             scene.objects[size_t(p.object_b)].name + "' for light '" +
+    j.what = "overlap correction of objects '" + scene.objects[size_t(p.object_a)].name +
+             "' and '" + scene.objects[size_t(p.object_b)].name + "' for light '" +
              scene.lights[size_t(maps.lights[size_t(p.light)])].name + "'";
     check_map(p.map, layout, 1, 3, j.what);
     jobs.push_back(j);
   }
   std::vector<const StaticShadowMap*> statics;
   for (const StaticShadowMap& s : maps.static_shadows) statics.push_back(&s);
-  std::sort(statics.begin(), statics.end(),
-            [](const StaticShadowMap* a, const StaticShadowMap* b) { return a->object < b->object; });
+  std::sort(statics.begin(), statics.end(), [](const StaticShadowMap* a, const StaticShadowMap* b) {
+    return a->object < b->object;
+  });
   for (size_t k = 0; k < statics.size(); ++k) {
     const StaticShadowMap& s = *statics[k];
     if (s.object < 0 || size_t(s.object) >= scene.objects.size())
@@ -222,7 +228,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<ColourDecision> colour(jobs.size());
   parallel_for(int(jobs.size()), threads, [&](int i) {
     const MapJob& j = jobs[size_t(i)];
-    extract_patches(*j.map, layout.regions, j.threshold, max_dim, j.prototype, j.what, per_job[size_t(i)]);
+    extract_patches(*j.map, layout.regions, j.threshold, max_dim, j.prototype, j.what,
+                    per_job[size_t(i)]);
     // Bounce tints C_l and S_ol; a light's colour is a run-time factor, so a patch keeps three
     // channels only where the tint shows above the 8-bit step (B is always 3: authored colours).
     if (j.prototype.kind == kGroupBase) return;
@@ -267,7 +274,9 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         std::min({l.color.x, l.color.y, l.color.z}) < 0.0f) {
       throw CookError("light '" + name + "': colour and intensity must be finite and >= 0");
     }
-    r.type = l.type == LightType::kPoint ? kLightPoint : l.type == LightType::kSpot ? kLightSpot : kLightDirectional;
+    r.type = l.type == LightType::kPoint  ? kLightPoint
+             : l.type == LightType::kSpot ? kLightSpot
+                                          : kLightDirectional;
     c.lights.push_back(r);
   }
   for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -314,7 +323,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       const int sy = std::clamp(y, 0, p.dest.h - 1);
       for (int x = -1; x <= p.dest.w; ++x) {
         const int sx = std::clamp(x, 0, p.dest.w - 1);
-        uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 + size_t(pl.channel)];
+        uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 +
+                                   size_t(pl.channel)];
         for (int ch = 0; ch < p.channels; ++ch) {
           dst[ch] = q.codes[(size_t(sy) * p.dest.w + size_t(sx)) * size_t(p.channels) + size_t(ch)];
         }
@@ -336,7 +346,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     c.patches.push_back(r);
   }
   for (size_t g = 0; g < c.groups.size(); ++g) {
-    for (uint32_t k = 0; k < c.groups[g].patch_count; ++k) c.patches[c.groups[g].first_patch + k].group = uint16_t(g);
+    for (uint32_t k = 0; k < c.groups[g].patch_count; ++k)
+      c.patches[c.groups[g].first_patch + k].group = uint16_t(g);
   }
 
   // Light-map UVs of the baked meshes.
@@ -348,7 +359,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     for (size_t i = 0; i < scene.meshes.size(); ++i) {
       const MeshInstance& mi = scene.meshes[i];
       const MeshLayout& ml = layout.meshes[i];
-      if (ml.source_vertex.size() != ml.uv.size()) throw CookError("mesh layout " + std::to_string(i) + ": UV count");
+      if (ml.source_vertex.size() != ml.uv.size())
+        throw CookError("mesh layout " + std::to_string(i) + ": UV count");
       PackContents::Mesh m;
       c.add_name(mi.name, &m.record.name_offset, &m.record.name_length);
       m.record.node_index = mi.node_index < 0 ? 0xFFFFFFFFu : uint32_t(mi.node_index);
@@ -359,9 +371,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       }
       m.indices = ml.indices;
       for (uint32_t idx : m.indices) {
-        if (idx >= m.vertices.size()) throw CookError("mesh layout " + std::to_string(i) + ": index out of range");
+        if (idx >= m.vertices.size())
+          throw CookError("mesh layout " + std::to_string(i) + ": index out of range");
       }
-      if (m.indices.size() % 3 != 0) throw CookError("mesh layout " + std::to_string(i) + ": index count");
+      if (m.indices.size() % 3 != 0)
+        throw CookError("mesh layout " + std::to_string(i) + ": index count");
       c.meshes.push_back(std::move(m));
     }
   }
@@ -372,7 +386,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     PackView view;
     Error error;
     if (PackView::open(bytes.data(), bytes.size(), &view, &error) != Status::kOk) {
-      throw CookError(std::string("internal: the written pack does not validate: ") + error.message);
+      throw CookError(std::string("internal: the written pack does not validate: ") +
+                      error.message);
     }
   }
 
@@ -422,7 +437,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["atlases"] = atlases;
   j["atlas_bytes"] = atlas_bytes;
   j["conventional_lightmap_bytes"] = lightmap_bytes;
-  j["atlas_to_lightmap_ratio"] = lightmap_bytes > 0 ? double(atlas_bytes) / double(lightmap_bytes) : 0.0;
+  j["atlas_to_lightmap_ratio"] =
+      lightmap_bytes > 0 ? double(atlas_bytes) / double(lightmap_bytes) : 0.0;
   j["pack_bytes"] = bytes.size();
   nlohmann::json maps_colour = nlohmann::json::array();
   int three = 0, one = 0;
@@ -431,8 +447,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     if (d.three + d.one == 0) continue;
     three += d.three;
     one += d.one;
-    maps_colour.push_back({{"map", jobs[i].what}, {"patches_3_channel", d.three},
-                           {"patches_1_channel", d.one}, {"max_tint", d.max_spread}});
+    maps_colour.push_back({{"map", jobs[i].what},
+                           {"patches_3_channel", d.three},
+                           {"patches_1_channel", d.one},
+                           {"max_tint", d.max_spread}});
   }
   j["colour"]["rule"] =
       "a 3-channel (bounce-tinted) patch of C_l or S_ol keeps 3 channels where some texel's "

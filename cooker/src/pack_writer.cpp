@@ -16,7 +16,9 @@ void PackContents::add_name(const std::string& name, uint32_t* offset, uint32_t*
 }
 
 namespace {
-uint64_t align_up(uint64_t v) { return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment; }
+uint64_t align_up(uint64_t v) {
+  return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
+}
 }  // namespace
 
 std::vector<uint8_t> write_pack(const PackContents& c) {
@@ -27,9 +29,11 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
   };
   // Table sections first, then the bulk data (not covered by the checksum).
   uint64_t atlas_bytes = 0;
-  for (const auto& a : c.atlases) atlas_bytes = align_up(atlas_bytes) + uint64_t(a.width) * a.height * 4;
+  for (const auto& a : c.atlases)
+    atlas_bytes = align_up(atlas_bytes) + uint64_t(a.width) * a.height * 4;
   uint64_t mesh_bytes = 0;
-  for (const auto& m : c.meshes) mesh_bytes += m.vertices.size() * sizeof(MeshVertex) + m.indices.size() * 4;
+  for (const auto& m : c.meshes)
+    mesh_bytes += m.vertices.size() * sizeof(MeshVertex) + m.indices.size() * 4;
   std::vector<Pending> sections = {
       {kSectionLights, c.lights.size() * sizeof(LightRecord)},
       {kSectionObjects, c.objects.size() * sizeof(ObjectRecord)},
@@ -96,7 +100,8 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
     r.width = a.width;
     r.height = a.height;
     r.data_offset = at;
-    if (a.rgba.size() != uint64_t(a.width) * a.height * 4) throw CookError("internal: atlas pixel count");
+    if (a.rgba.size() != uint64_t(a.width) * a.height * 4)
+      throw CookError("internal: atlas pixel count");
     put(find(kSectionAtlases).offset + i * sizeof(AtlasRecord), &r, sizeof(r));
     put(at, a.rgba.data(), a.rgba.size());
     at += a.rgba.size();

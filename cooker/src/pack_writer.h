@@ -20,7 +20,7 @@ struct PackContents {
     uint32_t width = 0, height = 0;
     std::vector<uint8_t> rgba;  // width * height * 4
   };
-  std::vector<Atlas> atlases;   // AtlasRecord::data_offset is assigned by the writer
+  std::vector<Atlas> atlases;  // AtlasRecord::data_offset is assigned by the writer
   std::string strings;
   struct Mesh {
     pack::MeshRecord record{};  // vertex_offset / index_offset / counts assigned by the writer

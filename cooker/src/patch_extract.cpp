@@ -39,13 +39,15 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
                      int max_dim, const SourcePatch& prototype, const std::string& what,
                      std::vector<SourcePatch>& out) {
   if (map.channels != 1 && map.channels != 3) {
-    throw CookError(what + ": a map must have 1 or 3 channels, has " + std::to_string(map.channels));
+    throw CookError(what + ": a map must have 1 or 3 channels, has " +
+                    std::to_string(map.channels));
   }
   for (size_t i = 0; i < map.data.size(); ++i) {
     if (!std::isfinite(map.data[i])) {
       const size_t t = i / size_t(map.channels);
-      throw CookError(what + ": non-finite value at texel (" + std::to_string(t % size_t(map.width)) +
-                      ", " + std::to_string(t / size_t(map.width)) + ")");
+      throw CookError(what + ": non-finite value at texel (" +
+                      std::to_string(t % size_t(map.width)) + ", " +
+                      std::to_string(t / size_t(map.width)) + ")");
     }
   }
   for (const Region& region : regions) {
@@ -60,7 +62,8 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
       if (!significant_box(map, clipped, sign, threshold, &box)) continue;
       for (int ty = box.y; ty < box.y + box.h; ty += max_dim) {
         for (int tx = box.x; tx < box.x + box.w; tx += max_dim) {
-          const Rect tile{tx, ty, std::min(max_dim, box.x + box.w - tx), std::min(max_dim, box.y + box.h - ty)};
+          const Rect tile{tx, ty, std::min(max_dim, box.x + box.w - tx),
+                          std::min(max_dim, box.y + box.h - ty)};
           Rect r;
           if (!significant_box(map, tile, sign, threshold, &r)) continue;
           SourcePatch p = prototype;

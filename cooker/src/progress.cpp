@@ -56,7 +56,8 @@ void Progress::message(const std::string& text) {
 // Caller holds mutex_.
 void Progress::draw(bool final_line) {
   const uint64_t done = done_.load();
-  const int percent = total_ == 0 ? 100 : static_cast<int>(done >= total_ ? 100 : done * 100 / total_);
+  const int percent =
+      total_ == 0 ? 100 : static_cast<int>(done >= total_ ? 100 : done * 100 / total_);
   if (quiet_) {
     last_percent_ = percent;
     return;

@@ -54,8 +54,12 @@ QuantizedPatch quantize_patch(const SourcePatch& patch, EncodingPolicy policy) {
     }
   }
   switch (policy) {
-    case EncodingPolicy::kLinear: out.encoding = pack::kEncodingLinear; break;
-    case EncodingPolicy::kSquare: out.encoding = pack::kEncodingSquare; break;
+    case EncodingPolicy::kLinear:
+      out.encoding = pack::kEncodingLinear;
+      break;
+    case EncodingPolicy::kSquare:
+      out.encoding = pack::kEncodingSquare;
+      break;
     case EncodingPolicy::kAuto:
       // Both cost the same bytes: keep the one with the smaller squared error (ties: linear).
       out.encoding = out.error[1].sum_sq_error < out.error[0].sum_sq_error ? pack::kEncodingSquare

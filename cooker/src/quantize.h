@@ -16,13 +16,13 @@ struct EncodingError {
   double sum_sq_error = 0.0;  // sum of squared errors
   double sum_sq_value = 0.0;  // sum of squared values (for relative RMSE)
   double max_error = 0.0;
-  uint64_t samples = 0;       // texel-channels measured
+  uint64_t samples = 0;  // texel-channels measured
   void add(const EncodingError& o);
 };
 
 struct QuantizedPatch {
-  float scale = 0.0f;  // > 0
-  uint8_t encoding = 0;  // pack::PatchEncoding
+  float scale = 0.0f;          // > 0
+  uint8_t encoding = 0;        // pack::PatchEncoding
   std::vector<uint8_t> codes;  // like SourcePatch::values
   EncodingError error[2];      // measured for linear [0] and square [1]
 };

@@ -14,7 +14,9 @@ namespace {
 
 using nlohmann::json;
 
-std::string type_name(const json& j) { return j.type_name(); }
+std::string type_name(const json& j) {
+  return j.type_name();
+}
 
 float finite_non_negative(const json& j, const std::string& where) {
   if (!j.is_number()) throw CookError(where + " must be a number, got " + type_name(j));
@@ -62,24 +64,29 @@ StateSpec parse_state_json(const std::string& text, const std::string& what) {
   } catch (const json::parse_error& e) {
     throw CookError(what + ": invalid JSON: " + e.what());
   }
-  if (!root.is_object()) throw CookError(what + ": a state must be a JSON object, got " + type_name(root));
+  if (!root.is_object())
+    throw CookError(what + ": a state must be a JSON object, got " + type_name(root));
   StateSpec spec;
   for (auto it = root.begin(); it != root.end(); ++it) {
     const std::string& key = it.key();
     if (key == "lights") {
-      if (!it->is_object()) throw CookError(what + ": \"lights\" must be an object, got " + type_name(*it));
+      if (!it->is_object())
+        throw CookError(what + ": \"lights\" must be an object, got " + type_name(*it));
       for (auto l = it->begin(); l != it->end(); ++l) {
         spec.lights[l.key()] = parse_light(*l, what + ": lights." + l.key());
       }
     } else if (key == "objects") {
-      if (!it->is_object()) throw CookError(what + ": \"objects\" must be an object, got " + type_name(*it));
+      if (!it->is_object())
+        throw CookError(what + ": \"objects\" must be an object, got " + type_name(*it));
       for (auto o = it->begin(); o != it->end(); ++o) {
         const std::string at = what + ": objects." + o.key();
         if (!o->is_object()) throw CookError(at + " must be an object, got " + type_name(*o));
         bool visible = true;
         for (auto f = o->begin(); f != o->end(); ++f) {
-          if (f.key() != "visible") throw CookError(at + "." + f.key() + ": unknown key (expected visible)");
-          if (!f->is_boolean()) throw CookError(at + ".visible must be true or false, got " + f->dump());
+          if (f.key() != "visible")
+            throw CookError(at + "." + f.key() + ": unknown key (expected visible)");
+          if (!f->is_boolean())
+            throw CookError(at + ".visible must be true or false, got " + f->dump());
           visible = f->get<bool>();
         }
         spec.objects[o.key()] = visible;

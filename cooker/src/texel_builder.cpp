@@ -117,7 +117,8 @@ void rasterize_region(const Scene& scene, const Layout& layout, int region_index
     const MeshLayout& ml = layout.meshes[size_t(mi)];
     for (size_t t = 0; t < ml.indices.size() / 3; ++t) {
       const uint32_t l[3] = {ml.indices[3 * t], ml.indices[3 * t + 1], ml.indices[3 * t + 2]};
-      const uint32_t s[3] = {ml.source_vertex[l[0]], ml.source_vertex[l[1]], ml.source_vertex[l[2]]};
+      const uint32_t s[3] = {ml.source_vertex[l[0]], ml.source_vertex[l[1]],
+                             ml.source_vertex[l[2]]};
       const glm::vec2 p[3] = {ml.uv[l[0]] * size, ml.uv[l[1]] * size, ml.uv[l[2]] * size};
       const glm::vec2 lo = glm::min(p[0], glm::min(p[1], p[2]));
       const glm::vec2 hi = glm::max(p[0], glm::max(p[1], p[2]));
@@ -142,7 +143,8 @@ void rasterize_region(const Scene& scene, const Layout& layout, int region_index
           best[i].distance = d;
           ts.valid[i] = 1;
           ts.position[i] = bary.x * pa + bary.y * pb + bary.z * pc;
-          glm::vec3 n = bary.x * m.normals[s[0]] + bary.y * m.normals[s[1]] + bary.z * m.normals[s[2]];
+          glm::vec3 n =
+              bary.x * m.normals[s[0]] + bary.y * m.normals[s[1]] + bary.z * m.normals[s[2]];
           const float len = glm::length(n);
           ts.normal[i] = len > 1e-6f ? n / len : face;
           ts.albedo[i] = sample_albedo(scene, m, bary, s[0], s[1], s[2]);
@@ -157,8 +159,7 @@ void rasterize_region(const Scene& scene, const Layout& layout, int region_index
 // surface lies inside solid geometry (a floor texel under a wall); it is moved just past the
 // nearest such surface, where it sees what the visible part of the texel sees.
 void push_out(const Tracer& tracer, const Layout& layout, TexelSet& ts, int threads) {
-  const float texel_world =
-      layout.texels_per_unit > 0.0f ? 1.0f / layout.texels_per_unit : 0.0f;
+  const float texel_world = layout.texels_per_unit > 0.0f ? 1.0f / layout.texels_per_unit : 0.0f;
   if (!(texel_world > 0.0f)) return;
   const float reach = 0.75f * texel_world;  // about half the texel diagonal, with margin
   const float eps = tracer.epsilon();
@@ -274,7 +275,8 @@ void stitch(FloatImage& map, const Layout& layout) {
   std::vector<Sample> samples;
   for (const SeamEdge& e : layout.seams) {
     const glm::vec2 size{float(w), float(h)};
-    const float len = std::max(glm::length((e.a1 - e.a0) * size), glm::length((e.b1 - e.b0) * size));
+    const float len =
+        std::max(glm::length((e.a1 - e.a0) * size), glm::length((e.b1 - e.b0) * size));
     const int n = std::max(2, static_cast<int>(std::ceil(len * 2.0f)));
     for (int k = 0; k < n; ++k) {
       const float f = (float(k) + 0.5f) / float(n);
@@ -331,7 +333,8 @@ TexelSet build_texels(const Scene& scene, const Layout& layout, const Tracer* tr
   return ts;
 }
 
-void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout, const TexelSet& texels) {
+void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout,
+                  const TexelSet& texels) {
   (void)scene;
   dilate(map, texels);
   stitch(map, layout);

@@ -27,13 +27,20 @@ constexpr unsigned kObjectMask = 2u;
 
 const char* error_name(RTCError code) {
   switch (code) {
-    case RTC_ERROR_NONE: return "none";
-    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-    case RTC_ERROR_CANCELLED: return "cancelled";
-    default: return "unknown error";
+    case RTC_ERROR_NONE:
+      return "none";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown error";
   }
 }
 
@@ -225,16 +232,17 @@ class EmbreeTracer final : public Tracer {
     for (size_t m = 0; m < scene.meshes.size(); ++m) {
       const MeshInstance& mesh = scene.meshes[m];
       if (mesh.object >= static_cast<int>(scene.objects.size())) {
-        throw CookError("mesh '" + mesh.name + "' refers to a semi-dynamic object that does not exist");
+        throw CookError("mesh '" + mesh.name +
+                        "' refers to a semi-dynamic object that does not exist");
       }
       mesh_object_[m] = mesh.object;
       const size_t tris = mesh.indices.size() / 3;
       if (tris == 0 || mesh.positions.empty()) continue;
       RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
       check("new geometry");
-      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-          geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-          mesh.positions.size()));
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                            RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                            mesh.positions.size()));
       auto* ix = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
           geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), tris));
       if (!v || !ix) {
@@ -253,8 +261,10 @@ class EmbreeTracer final : public Tracer {
         v[3 * i + 2] = p.z;
         max_abs = std::max({max_abs, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
         if (mesh.object >= 0) {
-          object_lo_[static_cast<size_t>(mesh.object)] = glm::min(object_lo_[static_cast<size_t>(mesh.object)], p);
-          object_hi_[static_cast<size_t>(mesh.object)] = glm::max(object_hi_[static_cast<size_t>(mesh.object)], p);
+          object_lo_[static_cast<size_t>(mesh.object)] =
+              glm::min(object_lo_[static_cast<size_t>(mesh.object)], p);
+          object_hi_[static_cast<size_t>(mesh.object)] =
+              glm::max(object_hi_[static_cast<size_t>(mesh.object)], p);
         }
       }
       for (size_t i = 0; i < tris * 3; ++i) {
@@ -418,8 +428,8 @@ class EmbreeTracer final : public Tracer {
   bool masks_ = true;
   bool has_objects_ = false;
   float epsilon_ = 1e-5f;
-  std::vector<int> mesh_object_;           // geometry id (= mesh index) -> object or -1
-  std::vector<const float*> vertices_;     // Embree-owned buffers, alive with the scene
+  std::vector<int> mesh_object_;        // geometry id (= mesh index) -> object or -1
+  std::vector<const float*> vertices_;  // Embree-owned buffers, alive with the scene
   std::vector<const uint32_t*> indices_;
   mutable std::array<Counter, kCounters> counters_;
   std::mutex error_mutex_;

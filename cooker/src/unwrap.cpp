@@ -7,10 +7,10 @@
 #include "lightpatch/cooker/unwrap.h"
 
 #include <algorithm>
-#include <cstring>
-#include <limits>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <string>
@@ -69,9 +69,10 @@ glm::vec3 face_normal(const MeshInstance& m, size_t t) {
 // Orthonormal tangent frame of a plane normal, chosen from the world axis least aligned with it so
 // that axis-aligned walls get axis-aligned charts.
 void plane_basis(const glm::vec3& n, glm::vec3* t, glm::vec3* b) {
-  const glm::vec3 a = std::abs(n.x) <= std::abs(n.y) && std::abs(n.x) <= std::abs(n.z)
-                          ? glm::vec3(1, 0, 0)
-                          : (std::abs(n.y) <= std::abs(n.z) ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
+  const glm::vec3 a =
+      std::abs(n.x) <= std::abs(n.y) && std::abs(n.x) <= std::abs(n.z)
+          ? glm::vec3(1, 0, 0)
+          : (std::abs(n.y) <= std::abs(n.z) ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
   *t = glm::normalize(glm::cross(a, n));
   *b = glm::cross(n, *t);
 }
@@ -97,7 +98,8 @@ std::vector<std::vector<uint32_t>> build_adjacency(const MeshInstance& m) {
   std::vector<uint32_t> id(m.positions.size());
   for (size_t i = 0; i < m.positions.size(); ++i) {
     const glm::vec3 p = m.positions[i];
-    id[i] = weld.emplace(PositionKey{p.x, p.y, p.z}, static_cast<uint32_t>(weld.size())).first->second;
+    id[i] =
+        weld.emplace(PositionKey{p.x, p.y, p.z}, static_cast<uint32_t>(weld.size())).first->second;
   }
   const size_t nt = m.indices.size() / 3;
   std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>> edges;
@@ -296,7 +298,8 @@ Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, 
     result.page = fixed_page;
     result.fits = fits(fixed_page);
   } else {
-    int page = std::max(kMinPage, (static_cast<int>(std::ceil(std::sqrt(double(total)))) + 3) / 4 * 4);
+    int page =
+        std::max(kMinPage, (static_cast<int>(std::ceil(std::sqrt(double(total)))) + 3) / 4 * 4);
     while (page <= max_page && !fits(page)) page += std::max(4, page / 32 / 4 * 4);
     result.page = std::min(page, max_page);
     result.fits = page <= max_page && fits(result.page);
@@ -383,8 +386,7 @@ Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
         throw CookError("TEXCOORD_1 of " + mesh_label(m) + " (primitive " +
                         std::to_string(m.primitive_index) + ") has triangle " + std::to_string(t) +
                         " overlapping " +
-                        (&o == &m ? std::string("another of its own triangles")
-                                  : mesh_label(o)) +
+                        (&o == &m ? std::string("another of its own triangles") : mesh_label(o)) +
                         " in the light map; light-map UVs must not overlap");
       }
       grid.insert(tri);
@@ -460,8 +462,8 @@ std::vector<SeamEdge> find_seams(const Scene& scene, const Layout& layout) {
         }
         auto [it, inserted] = first.emplace(std::make_pair(s0, s1), std::make_pair(l0, l1));
         if (inserted || (it->second.first == l0 && it->second.second == l1)) continue;
-        seams.push_back(SeamEdge{ml.uv[it->second.first], ml.uv[it->second.second], ml.uv[l0],
-                                 ml.uv[l1]});
+        seams.push_back(
+            SeamEdge{ml.uv[it->second.first], ml.uv[it->second.second], ml.uv[l0], ml.uv[l1]});
       }
   }
   return seams;
@@ -508,8 +510,8 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
     tpu *= kDensityStep;
   }
   if (!packed.fits) {
-    throw CookError("the light-map charts (" + std::to_string(charts.size()) +
-                    ") do not fit a " + std::to_string(options.lightmap_size > 0 ? options.lightmap_size : max_page) +
+    throw CookError("the light-map charts (" + std::to_string(charts.size()) + ") do not fit a " +
+                    std::to_string(options.lightmap_size > 0 ? options.lightmap_size : max_page) +
                     "² page even at a very low density; raise --lightmap-size");
   }
   if (tpu < requested) {

@@ -11,7 +11,9 @@ namespace {
 // query checks, which bounds the grid's memory.
 constexpr int64_t kMaxCellsPerTriangle = 1 << 16;
 
-float cross2(const glm::vec2& a, const glm::vec2& b) { return a.x * b.y - a.y * b.x; }
+float cross2(const glm::vec2& a, const glm::vec2& b) {
+  return a.x * b.y - a.y * b.x;
+}
 
 // Separating-axis test. Projections that overlap by less than `tol` count as separated, so shared
 // edges and corners are not overlaps.

@@ -31,7 +31,7 @@ class UvOverlapGrid {
   // Cells [r0,r2]x[r1,r3] covered by the triangle's box; false if there are too many.
   bool cell_range(const glm::vec2 tri[3], int64_t r[4]) const;
 
-  float cell_ = 0.0f;  // set from the first triangle's size
+  float cell_ = 0.0f;            // set from the first triangle's size
   std::vector<glm::vec2> tris_;  // 3 per inserted triangle
   std::unordered_map<Cell, std::vector<int>, CellHash> grid_;
   std::vector<int> big_;  // triangles too large for the grid

@@ -48,7 +48,8 @@ int Args::int_option(const std::string& name, int fallback, int min_value, int m
   return static_cast<int>(x);
 }
 
-float Args::float_option(const std::string& name, float fallback, float min_value, float max_value) {
+float Args::float_option(const std::string& name, float fallback, float min_value,
+                         float max_value) {
   std::string v;
   if (!option(name, &v)) return fallback;
   char* end = nullptr;

@@ -168,7 +168,8 @@ int verb_bench(Args& args) {
   const RuntimeMemory mem = rt.memory();
   const double rebuild = median(rebuild_ms), floor = median(floor_ms);
   const uint64_t light_texels = light_texel_runs.empty() ? 0 : uint64_t(median(light_texel_runs));
-  const uint64_t object_texels = object_texel_runs.empty() ? 0 : uint64_t(median(object_texel_runs));
+  const uint64_t object_texels =
+      object_texel_runs.empty() ? 0 : uint64_t(median(object_texel_runs));
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   nlohmann::ordered_json j;
   j["pack"] = path;
@@ -218,19 +219,20 @@ int verb_bench(Args& args) {
     std::printf("object toggle    %8.3f ms  (%llu texels)\n", median(object_ms),
                 static_cast<unsigned long long>(object_texels));
   }
-  std::printf("budget (texels)  rebuild frames  light frames  toggle frames  max frame ms  mean ms\n");
+  std::printf(
+      "budget (texels)  rebuild frames  light frames  toggle frames  max frame ms  mean ms\n");
   for (const BudgetRun& r : runs) {
     std::printf("%15llu  %14u  %12u  %13u  %12.3f  %7.3f\n",
                 static_cast<unsigned long long>(r.budget), r.rebuild_frames, r.light_change_frames,
                 r.object_toggle_frames, r.max_frame_ms, r.mean_frame_ms);
   }
-  std::printf("GPU memory: atlases %llu B, light map %llu B, intermediate %llu B, vertices %llu B, "
-              "indices %llu B\n",
-              static_cast<unsigned long long>(mem.atlases),
-              static_cast<unsigned long long>(mem.light_map),
-              static_cast<unsigned long long>(mem.intermediate),
-              static_cast<unsigned long long>(mem.vertex_buffer),
-              static_cast<unsigned long long>(mem.index_buffer));
+  std::printf(
+      "GPU memory: atlases %llu B, light map %llu B, intermediate %llu B, vertices %llu B, "
+      "indices %llu B\n",
+      static_cast<unsigned long long>(mem.atlases), static_cast<unsigned long long>(mem.light_map),
+      static_cast<unsigned long long>(mem.intermediate),
+      static_cast<unsigned long long>(mem.vertex_buffer),
+      static_cast<unsigned long long>(mem.index_buffer));
   return 0;
 }
 

@@ -72,7 +72,8 @@ CookOptions parse_common(Args& args, const char* output_what) {
 // Fails early, before a long cook, when the output's folder cannot take a file.
 void probe_output_folder(const std::string& path) {
   const size_t slash = path.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const std::string dir =
+      slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
   std::string probe = dir + "/.lightpatch-probe.XXXXXX";
   const int fd = ::mkstemp(probe.data());
   if (fd < 0) throw CookError("cannot write into '" + dir + "' (for '" + path + "')");

@@ -38,19 +38,30 @@ struct OpenPack {
   }
 };
 
-std::string name_string(const Name& n) { return std::string(n.data, n.length); }
+std::string name_string(const Name& n) {
+  return std::string(n.data, n.length);
+}
 
 const char* section_label(uint32_t type) {
   switch (type) {
-    case pack::kSectionLights: return "lights";
-    case pack::kSectionObjects: return "objects";
-    case pack::kSectionGroups: return "groups";
-    case pack::kSectionPatches: return "patches";
-    case pack::kSectionAtlases: return "atlases";
-    case pack::kSectionAtlasData: return "atlas_data";
-    case pack::kSectionStrings: return "strings";
-    case pack::kSectionMeshes: return "meshes";
-    case pack::kSectionMeshData: return "mesh_data";
+    case pack::kSectionLights:
+      return "lights";
+    case pack::kSectionObjects:
+      return "objects";
+    case pack::kSectionGroups:
+      return "groups";
+    case pack::kSectionPatches:
+      return "patches";
+    case pack::kSectionAtlases:
+      return "atlases";
+    case pack::kSectionAtlasData:
+      return "atlas_data";
+    case pack::kSectionStrings:
+      return "strings";
+    case pack::kSectionMeshes:
+      return "meshes";
+    case pack::kSectionMeshData:
+      return "mesh_data";
   }
   return "unknown";
 }
@@ -72,7 +83,8 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   for (uint32_t i = 0; i < p.object_count(); ++i) objects.push_back(name_string(p.object_name(i)));
   j["lights"] = lights;
   j["objects"] = objects;
-  uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0, square = 0;
+  uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
+                                         square = 0;
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
     const pack::PatchRecord& r = p.patch(i);
     by_kind[p.group(r.group).kind]++;
@@ -104,7 +116,8 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   nlohmann::ordered_json sections = nlohmann::ordered_json::object();
   const pack::SectionEntry* entries =
       reinterpret_cast<const pack::SectionEntry*>(p.bytes() + sizeof(pack::Header));
-  for (uint32_t i = 0; i < p.header().section_count; ++i) sections[section_label(entries[i].type)] = entries[i].length;
+  for (uint32_t i = 0; i < p.header().section_count; ++i)
+    sections[section_label(entries[i].type)] = entries[i].length;
   j["section_bytes"] = sections;
   j["bytes_per_patch_record"] = sizeof(pack::PatchRecord);
   const uint64_t lightmap_bytes = uint64_t(p.lightmap_width()) * p.lightmap_height() * 3;
@@ -133,19 +146,20 @@ int verb_info(Args& args) {
   std::printf("lights         %u\n", pack.view.light_count());
   for (const auto& l : j["lights"]) {
     std::printf("  %s  colour (%g, %g, %g)  intensity %g\n", l["name"].get<std::string>().c_str(),
-                l["color"][0].get<double>(), l["color"][1].get<double>(), l["color"][2].get<double>(),
-                l["intensity"].get<double>());
+                l["color"][0].get<double>(), l["color"][1].get<double>(),
+                l["color"][2].get<double>(), l["intensity"].get<double>());
   }
   std::printf("objects        %u\n", pack.view.object_count());
   for (const auto& o : j["objects"]) std::printf("  %s\n", o.get<std::string>().c_str());
   std::printf("groups         %u\n", pack.view.group_count());
-  std::printf("patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
-              "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu)\n",
-              pack.view.patch_count(), pt["base"].get<unsigned long long>(),
-              pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
-              pt["pair_correction"].get<unsigned long long>(),
-              pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
-              pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>());
+  std::printf(
+      "patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
+      "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu)\n",
+      pack.view.patch_count(), pt["base"].get<unsigned long long>(),
+      pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
+      pt["pair_correction"].get<unsigned long long>(),
+      pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
+      pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>());
   std::printf("atlases        %u:", pack.view.atlas_count());
   for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
     std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);
@@ -174,12 +188,13 @@ int verb_verify(Args& args) {
   PackView view;
   Error error;
   if (PackView::open(mapping.data(), mapping.size(), &view, &error) != Status::kOk) {
-    std::fprintf(stderr, "%s: INVALID: %s: %s\n", path.c_str(), status_name(error.status), error.message);
+    std::fprintf(stderr, "%s: INVALID: %s: %s\n", path.c_str(), status_name(error.status),
+                 error.message);
     return 1;
   }
   std::printf("%s: OK (%llu bytes, %u lights, %u objects, %u patches, %u atlases)\n", path.c_str(),
-              static_cast<unsigned long long>(mapping.size()), view.light_count(), view.object_count(),
-              view.patch_count(), view.atlas_count());
+              static_cast<unsigned long long>(mapping.size()), view.light_count(),
+              view.object_count(), view.patch_count(), view.atlas_count());
   return 0;
 }
 
@@ -192,8 +207,10 @@ int verb_recompose(Args& args) {
   const std::string path = args.positional("PACK");
   args.finish();
   if (output.empty()) throw ArgsError("-o MAP.pfm is required");
-  if (!state_path.empty() && !states_path.empty()) throw ArgsError("give --state or --states, not both");
-  if (backend != "cpu" && backend != "gles") throw ArgsError("--backend takes cpu or gles, got '" + backend + "'");
+  if (!state_path.empty() && !states_path.empty())
+    throw ArgsError("give --state or --states, not both");
+  if (backend != "cpu" && backend != "gles")
+    throw ArgsError("--backend takes cpu or gles, got '" + backend + "'");
 
   std::vector<cooker::StateSpec> states;
   if (!state_path.empty()) states.push_back(cooker::load_state_file(state_path));
@@ -205,7 +222,8 @@ int verb_recompose(Args& args) {
   if (backend == "gles") {
     std::vector<float> rgb;
     recompose_gles(view, states, &rgb);
-    if (rgb.size() != map.data.size()) throw CookError("GLES backend returned a map of the wrong size");
+    if (rgb.size() != map.data.size())
+      throw CookError("GLES backend returned a map of the wrong size");
     map.data = std::move(rgb);
   } else {
     Error error;
@@ -220,7 +238,8 @@ int verb_recompose(Args& args) {
     for (const cooker::StateSpec& spec : states) {
       state.reset_to_authored(view);
       apply_state(spec, view, &state);
-      if (recomposer.apply(state) != Status::kOk) throw CookError("recompose: state does not match the pack");
+      if (recomposer.apply(state) != Status::kOk)
+        throw CookError("recompose: state does not match the pack");
     }
     std::copy(recomposer.rgb(), recomposer.rgb() + map.data.size(), map.data.begin());
   }

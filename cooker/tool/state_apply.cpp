@@ -25,8 +25,9 @@ void apply_state(const cooker::StateSpec& spec, const PackView& pack, SceneState
   for (const auto& [name, o] : spec.lights) {
     const int32_t i = pack.find_light(name.data(), static_cast<uint32_t>(name.size()));
     if (i < 0) {
-      throw cooker::CookError("state names light '" + name + "', which the pack does not have (its lights: " +
-                              names_of(pack, true) + ")");
+      throw cooker::CookError(
+          "state names light '" + name +
+          "', which the pack does not have (its lights: " + names_of(pack, true) + ")");
     }
     const uint32_t li = static_cast<uint32_t>(i);
     if ((o.has_on && state->set_light_on(li, o.on) != Status::kOk) ||

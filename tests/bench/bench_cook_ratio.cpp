@@ -8,8 +8,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <string>
 #include <ctime>
+#include <string>
 
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/tracer.h"
@@ -34,7 +34,8 @@ void add_grid(Scene& s, const glm::vec3& o, const glm::vec3& u, const glm::vec3&
   }
   for (int j = 0; j < k; ++j) {
     for (int i = 0; i < k; ++i) {
-      const uint32_t a = uint32_t(j * (k + 1) + i), b = a + 1, c = a + uint32_t(k) + 2, d = a + uint32_t(k) + 1;
+      const uint32_t a = uint32_t(j * (k + 1) + i), b = a + 1, c = a + uint32_t(k) + 2,
+                     d = a + uint32_t(k) + 1;
       for (uint32_t x : {a, b, c, a, c, d}) m.indices.push_back(x);
     }
   }
@@ -60,20 +61,24 @@ Scene room(bool semi, int tessellation) {
   } else {
     test::add_closed_room(s, {-4, 0, -4}, {4, 3, 4}, 0.2f, "room");
   }
-  const glm::vec3 boxes[6][2] = {{{-3, 0, -3}, {-1.5f, 0.8f, -2}},  {{1, 0, -3}, {2.5f, 0.9f, -1.5f}},
-                                 {{-1, 0, -0.5f}, {1, 0.75f, 0.5f}}, {{-3.5f, 0, 1}, {-3, 2, 3}},
-                                 {{2, 0, 2}, {2.6f, 1.2f, 2.6f}},    {{-0.3f, 0.75f, -0.2f}, {0.1f, 1.1f, 0.2f}}};
+  const glm::vec3 boxes[6][2] = {
+      {{-3, 0, -3}, {-1.5f, 0.8f, -2}},   {{1, 0, -3}, {2.5f, 0.9f, -1.5f}},
+      {{-1, 0, -0.5f}, {1, 0.75f, 0.5f}}, {{-3.5f, 0, 1}, {-3, 2, 3}},
+      {{2, 0, 2}, {2.6f, 1.2f, 2.6f}},    {{-0.3f, 0.75f, -0.2f}, {0.1f, 1.1f, 0.2f}}};
   for (int i = 0; i < 6; ++i) {
     const std::string name = "furniture_" + std::to_string(i);
-    if (semi) test::add_object_box(s, boxes[i][0], boxes[i][1], name);
-    else test::add_box(s, boxes[i][0], boxes[i][1], name);
+    if (semi)
+      test::add_object_box(s, boxes[i][0], boxes[i][1], name);
+    else
+      test::add_box(s, boxes[i][0], boxes[i][1], name);
   }
   s.lights.push_back(test::point_light("lamp_a", {-2, 2.6f, -2}, 8.0f, semi));
   s.lights.push_back(test::point_light("lamp_b", {2, 2.6f, 2}, 8.0f, semi));
   Light soft = test::point_light("candle", {0, 1.4f, 0}, 2.0f, semi);
   soft.radius = 0.05f;
   s.lights.push_back(soft);
-  s.lights.push_back(test::spot_light("spot", {3.5f, 2.8f, -3.5f}, {-1, -1, 1}, 30.0f, 0.3f, 0.6f, semi));
+  s.lights.push_back(
+      test::spot_light("spot", {3.5f, 2.8f, -3.5f}, {-1, -1, 1}, 30.0f, 0.3f, 0.6f, semi));
   test::finish(s);
   return s;
 }
@@ -142,17 +147,20 @@ void bake_once(const Scene& scene, const Tracer& tracer, const TexelSet& texels,
   const nlohmann::json& root = report.root();
   std::string text;
   if (root.contains("stages")) {
-    for (const auto& [k, v] : root["stages"].items()) text += "  " + k + " " + std::to_string(v.get<double>()) + " s\n";
+    for (const auto& [k, v] : root["stages"].items())
+      text += "  " + k + " " + std::to_string(v.get<double>()) + " s\n";
   }
   if (root.contains("indirect") && root["indirect"].contains("groups")) {
     for (const auto& g : root["indirect"]["groups"]) {
-      text += "  indirect " + g["group"].get<std::string>() + ": " + g["reason"].get<std::string>() + "\n";
+      text += "  indirect " + g["group"].get<std::string>() + ": " +
+              g["reason"].get<std::string>() + "\n";
     }
   }
   if (root.contains("decisions")) {
     for (const auto& d : root["decisions"]) {
       const std::string what = d["what"].get<std::string>();
-      if (what.rfind("indirect bounce", 0) == 0) text += "  " + what + ": " + d["reason"].get<std::string>() + "\n";
+      if (what.rfind("indirect bounce", 0) == 0)
+        text += "  " + what + ": " + d["reason"].get<std::string>() + "\n";
     }
   }
   best.stages = text;
@@ -177,13 +185,15 @@ int main(int argc, char** argv) {
   }
   std::printf("texels: %d x %d, best of %d, %zu triangles (72 of them in the furniture)\n",
               texels.width, texels.height, repeats, static_scene.triangle_count());
-  std::printf("static:       %.3f s wall, %.3f s cpu, %llu rays (%.2f Mrays/s per cpu-s), %zu map\n",
-              st.seconds, st.cpu_seconds, static_cast<unsigned long long>(st.rays),
-              st.rays / st.cpu_seconds * 1e-6, st.maps);
-  std::printf("semi-dynamic: %.3f s wall, %.3f s cpu, %llu rays (%.2f Mrays/s per cpu-s), %zu maps "
-              "(%zu shadow pairs)\n",
-              sd.seconds, sd.cpu_seconds, static_cast<unsigned long long>(sd.rays),
-              sd.rays / sd.cpu_seconds * 1e-6, sd.maps, sd.pairs);
+  std::printf(
+      "static:       %.3f s wall, %.3f s cpu, %llu rays (%.2f Mrays/s per cpu-s), %zu map\n",
+      st.seconds, st.cpu_seconds, static_cast<unsigned long long>(st.rays),
+      st.rays / st.cpu_seconds * 1e-6, st.maps);
+  std::printf(
+      "semi-dynamic: %.3f s wall, %.3f s cpu, %llu rays (%.2f Mrays/s per cpu-s), %zu maps "
+      "(%zu shadow pairs)\n",
+      sd.seconds, sd.cpu_seconds, static_cast<unsigned long long>(sd.rays),
+      sd.rays / sd.cpu_seconds * 1e-6, sd.maps, sd.pairs);
   std::printf("static cook:\n%s", st.stages.c_str());
   std::printf("semi-dynamic cook:\n%s", sd.stages.c_str());
   std::printf("ratio semi-dynamic / static: %.3f wall, %.3f cpu (goal <= 1.1)\n",

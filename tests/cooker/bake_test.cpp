@@ -171,9 +171,11 @@ TEST(Bake, ResultsDoNotDependOnThreadCount) {
   EXPECT_EQ(a.output_step, b.output_step);
   EXPECT_EQ(a.base.data, b.base.data);
   ASSERT_EQ(a.contribution.size(), b.contribution.size());
-  for (size_t k = 0; k < a.contribution.size(); ++k) EXPECT_EQ(a.contribution[k].data, b.contribution[k].data);
+  for (size_t k = 0; k < a.contribution.size(); ++k)
+    EXPECT_EQ(a.contribution[k].data, b.contribution[k].data);
   ASSERT_EQ(a.shadows.size(), b.shadows.size());
-  for (size_t k = 0; k < a.shadows.size(); ++k) EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
+  for (size_t k = 0; k < a.shadows.size(); ++k)
+    EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
 }
 
 TEST(Bake, StaticLightBakesLikeItsContribution) {
@@ -226,7 +228,8 @@ TEST(Bake, OutOfReachPairIsCulledWithReason) {
   EXPECT_TRUE(maps.shadows.empty());
   ASSERT_EQ(report.root()["pairs"].size(), 1u);
   EXPECT_FALSE(report.root()["pairs"][0]["kept"].get<bool>());
-  EXPECT_NE(report.root()["pairs"][0]["reason"].get<std::string>().find("reach"), std::string::npos);
+  EXPECT_NE(report.root()["pairs"][0]["reason"].get<std::string>().find("reach"),
+            std::string::npos);
   EXPECT_EQ(report.root()["pairs_skipped"].get<int>(), 1);
 }
 
@@ -238,8 +241,9 @@ TEST(Bake, BakeStateRejectsNamesTheSceneLacks) {
   const Layout layout = test::bare_layout(64, 64);
   StateSpec unknown_light;
   unknown_light.lights["candle_9"] = LightOverride{};
-  EXPECT_THROW(bake_state(f.scene, layout, f.texels, *tracer, unknown_light, options(), progress, report),
-               CookError);
+  EXPECT_THROW(
+      bake_state(f.scene, layout, f.texels, *tracer, unknown_light, options(), progress, report),
+      CookError);
   StateSpec unknown_object;
   unknown_object.objects["spell_book"] = false;
   try {
@@ -250,8 +254,9 @@ TEST(Bake, BakeStateRejectsNamesTheSceneLacks) {
   }
   StateSpec static_light;
   static_light.lights["corner"] = LightOverride{};
-  EXPECT_THROW(bake_state(f.scene, layout, f.texels, *tracer, static_light, options(), progress, report),
-               CookError);
+  EXPECT_THROW(
+      bake_state(f.scene, layout, f.texels, *tracer, static_light, options(), progress, report),
+      CookError);
 }
 
 TEST(Bake, OutputStepIsThePercentileOverTwoFiftyFive) {

@@ -37,7 +37,8 @@ ToolRun expect_success(const std::vector<std::string>& args) {
 void expect_failure(const ScratchDir& dir, const std::vector<std::string>& args,
                     const std::string& word, const std::string& output) {
   const std::vector<std::string> before = dir.entries();
-  const std::vector<std::uint8_t> old = output.empty() ? std::vector<std::uint8_t>() : read_bytes(output);
+  const std::vector<std::uint8_t> old =
+      output.empty() ? std::vector<std::uint8_t>() : read_bytes(output);
   const ToolRun r = run_tool(args);
   const std::string what = describe(args, r);
   EXPECT_NE(r.code, 0) << what;
@@ -51,7 +52,9 @@ void expect_failure(const ScratchDir& dir, const std::vector<std::string>& args,
   EXPECT_EQ(dir.entries(), before) << "files left behind or removed: " << what;
 }
 
-void write_precious(const std::string& path) { write_text(path, "precious bytes, keep me\n"); }
+void write_precious(const std::string& path) {
+  write_text(path, "precious bytes, keep me\n");
+}
 
 TEST(Cli, CookInfoVerifyRecomposeAndBakeStateOnASmallScene) {
   ScratchDir dir;
@@ -74,7 +77,8 @@ TEST(Cli, CookInfoVerifyRecomposeAndBakeStateOnASmallScene) {
   EXPECT_EQ(j["lightmap"]["width"], 32);
   EXPECT_EQ(j["objects"][0], "crate");
 
-  expect_success({"recompose", dir.file("room.lpk"), "--backend", "cpu", "-o", dir.file("authored.pfm")});
+  expect_success(
+      {"recompose", dir.file("room.lpk"), "--backend", "cpu", "-o", dir.file("authored.pfm")});
   const cooker::FloatImage authored = cooker::read_pfm(dir.file("authored.pfm"));
   EXPECT_EQ(authored.width, 32);
   EXPECT_EQ(authored.height, 32);
@@ -86,10 +90,13 @@ TEST(Cli, CookInfoVerifyRecomposeAndBakeStateOnASmallScene) {
   }
   EXPECT_GT(sum, 0.0);
 
-  write_text(dir.file("dark.json"), R"({"lights": {"lamp": {"on": false}}, "objects": {"crate": {"visible": false}}})");
-  write_text(dir.file("states.jsonl"), "{\"lights\": {\"lamp\": {\"intensity\": 2.0}}}\n\n"
-                                       "{\"objects\": {\"crate\": {\"visible\": false}}}\n");
-  expect_success({"recompose", dir.file("room.lpk"), "--state", dir.file("dark.json"), "-o", dir.file("dark.pfm")});
+  write_text(dir.file("dark.json"),
+             R"({"lights": {"lamp": {"on": false}}, "objects": {"crate": {"visible": false}}})");
+  write_text(dir.file("states.jsonl"),
+             "{\"lights\": {\"lamp\": {\"intensity\": 2.0}}}\n\n"
+             "{\"objects\": {\"crate\": {\"visible\": false}}}\n");
+  expect_success({"recompose", dir.file("room.lpk"), "--state", dir.file("dark.json"), "-o",
+                  dir.file("dark.pfm")});
   expect_success({"recompose", dir.file("room.lpk"), "--states", dir.file("states.jsonl"), "-o",
                   dir.file("states.pfm")});
   // bake-state: the same layout as the cook, so the same map size.
@@ -143,7 +150,8 @@ TEST(Cli, BadScenesAndOptionsLeaveTheOutputUntouched) {
     expect_failure(dir, {verb, scene, "-o", o, "--lightmap-size"}, "--lightmap-size", o);
     expect_failure(dir, {verb, "-o", o}, "SCENE", o);
     expect_failure(dir, cat({verb, scene}, kFast), "-o", o);
-    expect_failure(dir, cat({verb, scene, "-o", dir.file("no/such/dir/x")}, kFast), "no/such/dir", "");
+    expect_failure(dir, cat({verb, scene, "-o", dir.file("no/such/dir/x")}, kFast), "no/such/dir",
+                   "");
     expect_failure(dir, cat({verb, scene, "-o", dir.path().string()}, kFast), "directory", "");
   }
 }
@@ -172,7 +180,8 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
   expect_success(cat({"cook", scene, "-o", dir.file("direct.lpk"), "--no-indirect", "--report",
                       dir.file("direct.json")},
                      kFast));
-  EXPECT_EQ(nlohmann::json::parse(read_bytes(dir.file("direct.json")))["indirect"]["enabled"], false);
+  EXPECT_EQ(nlohmann::json::parse(read_bytes(dir.file("direct.json")))["indirect"]["enabled"],
+            false);
   expect_success(cat({"cook", scene, "-o", dir.file("a.lpk"), "--photons", "5000", "--seed", "7",
                       "--threads", "1", "--report", dir.file("a.json")},
                      kFast));
@@ -180,10 +189,12 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
   EXPECT_EQ(a["indirect"]["enabled"], true);
   EXPECT_EQ(a["indirect"]["photons"], 5000);
   // One thread or all cores: the same pack.
-  expect_success(cat({"cook", scene, "-o", dir.file("b.lpk"), "--photons", "5000", "--seed", "7"}, kFast));
+  expect_success(
+      cat({"cook", scene, "-o", dir.file("b.lpk"), "--photons", "5000", "--seed", "7"}, kFast));
   EXPECT_TRUE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("b.lpk")));
   // Another seed: other photons, another pack.
-  expect_success(cat({"cook", scene, "-o", dir.file("c.lpk"), "--photons", "5000", "--seed", "8"}, kFast));
+  expect_success(
+      cat({"cook", scene, "-o", dir.file("c.lpk"), "--photons", "5000", "--seed", "8"}, kFast));
   EXPECT_FALSE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("c.lpk")));
   const std::string out = dir.file("out.lpk");
   write_precious(out);
@@ -213,9 +224,11 @@ TEST(Cli, BadStateFilesLeaveTheOutputUntouched) {
     SCOPED_TRACE(states[i].first);
     const std::string state = dir.file("state" + std::to_string(i) + ".json");
     write_text(state, states[i].first);
-    expect_failure(dir, cat({"bake-state", scene, "--state", state, "-o", map}, kFast), states[i].second, map);
+    expect_failure(dir, cat({"bake-state", scene, "--state", state, "-o", map}, kFast),
+                   states[i].second, map);
   }
-  expect_failure(dir, cat({"bake-state", scene, "--state", dir.file("absent.json"), "-o", map}, kFast),
+  expect_failure(dir,
+                 cat({"bake-state", scene, "--state", dir.file("absent.json"), "-o", map}, kFast),
                  "absent.json", map);
 }
 
@@ -230,7 +243,8 @@ TEST(Cli, DamagedPacksAndBadRecomposeInputsAreRejected) {
 
   std::vector<std::pair<std::string, std::vector<std::uint8_t>>> damaged;
   damaged.push_back({"empty.lpk", {}});
-  damaged.push_back({"half.lpk", {pack.begin(), pack.begin() + static_cast<long>(pack.size() / 2)}});
+  damaged.push_back(
+      {"half.lpk", {pack.begin(), pack.begin() + static_cast<long>(pack.size() / 2)}});
   damaged.push_back({"short.lpk", {pack.begin(), pack.end() - 1}});
   damaged.push_back({"header.lpk", {pack.begin(), pack.begin() + 16}});
   std::vector<std::uint8_t> magic = pack;
@@ -253,13 +267,16 @@ TEST(Cli, DamagedPacksAndBadRecomposeInputsAreRejected) {
 
   const std::string room = dir.file("room.lpk");
   write_text(dir.file("unknown.json"), R"({"objects": {"spell_book": {"visible": false}}})");
-  expect_failure(dir, {"recompose", room, "--state", dir.file("unknown.json"), "-o", map}, "spell_book", map);
+  expect_failure(dir, {"recompose", room, "--state", dir.file("unknown.json"), "-o", map},
+                 "spell_book", map);
   write_text(dir.file("bad.jsonl"), "{\"lights\": {}}\n{not json}\n");
-  expect_failure(dir, {"recompose", room, "--states", dir.file("bad.jsonl"), "-o", map}, "bad.jsonl:2", map);
+  expect_failure(dir, {"recompose", room, "--states", dir.file("bad.jsonl"), "-o", map},
+                 "bad.jsonl:2", map);
   expect_failure(dir, {"recompose", room, "--backend", "vulkan", "-o", map}, "vulkan", map);
   expect_failure(dir, {"recompose", room}, "-o", map);
-  expect_failure(dir, {"recompose", room, "--state", dir.file("unknown.json"), "--states",
-                       dir.file("bad.jsonl"), "-o", map},
+  expect_failure(dir,
+                 {"recompose", room, "--state", dir.file("unknown.json"), "--states",
+                  dir.file("bad.jsonl"), "-o", map},
                  "--state", map);
   expect_failure(dir, {"info"}, "PACK", "");
   expect_failure(dir, {"frobnicate"}, "unknown verb", "");

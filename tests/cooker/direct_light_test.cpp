@@ -37,7 +37,9 @@ BakedMaps bake(const Scene& scene, const TexelSet& texels, int area_samples = 0)
                    progress, report);
 }
 
-float rel_err(float got, float want) { return std::fabs(got - want) / std::max(std::fabs(want), 1e-30f); }
+float rel_err(float got, float want) {
+  return std::fabs(got - want) / std::max(std::fabs(want), 1e-30f);
+}
 
 TEST(DirectLight, PointLightOverPlaneIsInverseSquareCosine) {
   Scene scene = floor_scene();
@@ -56,7 +58,8 @@ TEST(DirectLight, PointLightOverPlaneIsInverseSquareCosine) {
       const glm::vec3 d = lp - p;
       const float dist = glm::length(d);
       const float e = intensity * (d.y / dist) / (dist * dist);
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, rel_err(maps.base.at(x, y, c), e * l.color[c]));
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, rel_err(maps.base.at(x, y, c), e * l.color[c]));
     }
   }
   EXPECT_LT(worst, 0.01f);
@@ -78,7 +81,8 @@ TEST(DirectLight, SemiDynamicPointLightContributionIsUnitIntensity) {
     for (int x = 0; x < kN; ++x) {
       const glm::vec3 d = lp - texels.position[texels.index(x, y)];
       const float dist = glm::length(d);
-      worst = std::max(worst, rel_err(maps.contribution[0].at(x, y, 0), (d.y / dist) / (dist * dist)));
+      worst =
+          std::max(worst, rel_err(maps.contribution[0].at(x, y, 0), (d.y / dist) / (dist * dist)));
       EXPECT_EQ(maps.base.at(x, y, 0), 0.0f);
     }
   }
@@ -194,7 +198,8 @@ TEST(DirectLight, SphereLightGivesPenumbraAndMatchesPointFarAway) {
       const float got = maps.base.at(x, y, 0);
       ASSERT_TRUE(std::isfinite(got));
       if (got > 0.05f * e && got < 0.95f * e) ++penumbra;
-      if (std::max(std::fabs(p.x), std::fabs(p.z)) > 1.4f) worst_far = std::max(worst_far, rel_err(got, e));
+      if (std::max(std::fabs(p.x), std::fabs(p.z)) > 1.4f)
+        worst_far = std::max(worst_far, rel_err(got, e));
     }
   }
   EXPECT_GT(penumbra, 40);
@@ -211,14 +216,16 @@ TEST(DirectLight, EmissiveSquareOverPointMatchesFormFactor) {
   // A 2 x 2 emitter 1 m above the texel, facing down.
   add_quad(scene, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}, "panel", -1, 1);
   test::finish(scene);
-  const TexelSet texels = grid_texels(1, 1, {-1e-3f, 0, -1e-3f}, {2e-3f, 0, 0}, {0, 0, 2e-3f}, {0, 1, 0});
+  const TexelSet texels =
+      grid_texels(1, 1, {-1e-3f, 0, -1e-3f}, {2e-3f, 0, 0}, {0, 0, 2e-3f}, {0, 1, 0});
   const BakedMaps maps = bake(scene, texels, 16384);
   // Parallel rectangle over a corner (a = b = c = 1): F = (1/pi) * (1/sqrt2) * atan(1/sqrt2);
   // the centre sees four such; E = pi * L * F_total.
   const double fc = (1.0 / M_PI) * (1.0 / std::sqrt(2.0)) * std::atan(1.0 / std::sqrt(2.0));
   const double want = M_PI * 4.0 * fc;
   const double got = maps.base.at(0, 0, 1);
-  std::printf("emissive: got %.5f want %.5f (error %.3g)\n", got, want, std::fabs(got - want) / want);
+  std::printf("emissive: got %.5f want %.5f (error %.3g)\n", got, want,
+              std::fabs(got - want) / want);
   EXPECT_NEAR(got, want, 0.01 * want);
 }
 

@@ -26,10 +26,18 @@ TEST(DracoCook, CompressedSceneBakesToTheSameMap) {
   ASSERT_LT(read_bytes(dir.file("draco.glb")).size(), read_bytes(dir.file("plain.glb")).size());
   write_text(dir.file("state.json"), R"({"lights": {"lamp": {"intensity": 9.0}}})");
   for (const char* name : {"plain", "draco"}) {
-    const std::vector<std::string> args = {
-        "bake-state", dir.file(std::string(name) + ".glb"), "--state", dir.file("state.json"),
-        "-o", dir.file(std::string(name) + ".pfm"), "--quality", "draft", "--lightmap-size", "64",
-        "--no-indirect", "--quiet"};
+    const std::vector<std::string> args = {"bake-state",
+                                           dir.file(std::string(name) + ".glb"),
+                                           "--state",
+                                           dir.file("state.json"),
+                                           "-o",
+                                           dir.file(std::string(name) + ".pfm"),
+                                           "--quality",
+                                           "draft",
+                                           "--lightmap-size",
+                                           "64",
+                                           "--no-indirect",
+                                           "--quiet"};
     const ToolRun r = run_tool(args);
     ASSERT_EQ(r.code, 0) << describe(args, r);
   }

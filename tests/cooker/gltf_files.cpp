@@ -86,7 +86,8 @@ std::vector<std::uint8_t> join_glb(const GltfParts& parts) {
   std::vector<std::uint8_t> out;
   put_u32(out, 0x46546C67u);
   put_u32(out, 2);
-  put_u32(out, static_cast<std::uint32_t>(12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin.size())));
+  put_u32(out,
+          static_cast<std::uint32_t>(12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin.size())));
   put_u32(out, static_cast<std::uint32_t>(json.size()));
   put_u32(out, 0x4E4F534Au);
   out.insert(out.end(), json.begin(), json.end());
@@ -121,9 +122,13 @@ std::string write_glb(const ScratchDir& dir, const std::string& stem, const Gltf
 std::size_t float_offset(const GltfParts& parts, int accessor, std::size_t element, int component) {
   const auto& acc = parts.json.at("accessors").at(static_cast<std::size_t>(accessor));
   const auto& view = parts.json.at("bufferViews").at(acc.at("bufferView").get<std::size_t>());
-  const std::size_t comps = acc.at("type") == "SCALAR" ? 1 : acc.at("type") == "VEC2" ? 2
-                            : acc.at("type") == "VEC3" ? 3 : 4;
-  const std::size_t size = acc.at("componentType") == 5126 ? 4 : acc.at("componentType") == 5123 ? 2 : 4;
+  const std::size_t comps = acc.at("type") == "SCALAR" ? 1
+                            : acc.at("type") == "VEC2" ? 2
+                            : acc.at("type") == "VEC3" ? 3
+                                                       : 4;
+  const std::size_t size = acc.at("componentType") == 5126   ? 4
+                           : acc.at("componentType") == 5123 ? 2
+                                                             : 4;
   const std::size_t stride = view.value("byteStride", comps * size);
   return view.value("byteOffset", std::size_t{0}) + acc.value("byteOffset", std::size_t{0}) +
          element * stride + static_cast<std::size_t>(component) * size;
@@ -151,7 +156,8 @@ void set_index(GltfParts& parts, int accessor, std::size_t element, std::uint32_
 }
 
 std::string base64(const std::vector<std::uint8_t>& data) {
-  static constexpr char kTable[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  static constexpr char kTable[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   for (std::size_t i = 0; i < data.size(); i += 3) {
     const std::uint32_t b0 = data[i];
@@ -176,11 +182,16 @@ scenegen::SceneBuilder small_room(float lamp_radius) {
                   {1.2f, 0.0f, 1.2f});
   b.add_mesh_node("crate", make_box({-0.25f, 0.0f, -0.25f}, {0.25f, 0.5f, 0.25f}), wood,
                   {-0.5f, 0.0f, 0.3f}, /*semi_dynamic=*/true);
-  b.add_light_node("lamp", {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.9f, 0.8f},
-                            .intensity = 6.0f},
-                   {-0.3f, 1.6f, 0.2f}, {0, -1, 0}, /*semi_dynamic=*/true, lamp_radius);
-  b.add_light_node("spot", {.name = "spot", .type = LightType::kSpot, .intensity = 10.0f,
-                            .inner_cone_angle = 0.3f, .outer_cone_angle = 0.6f},
+  b.add_light_node(
+      "lamp",
+      {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.9f, 0.8f}, .intensity = 6.0f},
+      {-0.3f, 1.6f, 0.2f}, {0, -1, 0}, /*semi_dynamic=*/true, lamp_radius);
+  b.add_light_node("spot",
+                   {.name = "spot",
+                    .type = LightType::kSpot,
+                    .intensity = 10.0f,
+                    .inner_cone_angle = 0.3f,
+                    .outer_cone_angle = 0.6f},
                    {1.0f, 2.5f, -1.0f}, {-0.2f, -1.0f, 0.3f});
   return b;
 }
@@ -219,11 +230,16 @@ scenegen::SceneBuilder small_room_with_uv1() {
   b.add_mesh_node("floor", floor, grey);
   b.add_mesh_node("pillar", pillar, grey, {1.2f, 0.0f, 1.2f});
   b.add_mesh_node("crate", crate, wood, {-0.5f, 0.0f, 0.3f}, /*semi_dynamic=*/true);
-  b.add_light_node("lamp", {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.9f, 0.8f},
-                            .intensity = 6.0f},
-                   {-0.3f, 1.6f, 0.2f}, {0, -1, 0}, /*semi_dynamic=*/true);
-  b.add_light_node("spot", {.name = "spot", .type = LightType::kSpot, .intensity = 10.0f,
-                            .inner_cone_angle = 0.3f, .outer_cone_angle = 0.6f},
+  b.add_light_node(
+      "lamp",
+      {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.9f, 0.8f}, .intensity = 6.0f},
+      {-0.3f, 1.6f, 0.2f}, {0, -1, 0}, /*semi_dynamic=*/true);
+  b.add_light_node("spot",
+                   {.name = "spot",
+                    .type = LightType::kSpot,
+                    .intensity = 10.0f,
+                    .inner_cone_angle = 0.3f,
+                    .outer_cone_angle = 0.6f},
                    {1.0f, 2.5f, -1.0f}, {-0.2f, -1.0f, 0.3f});
   return b;
 }

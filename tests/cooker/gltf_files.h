@@ -40,7 +40,8 @@ struct GltfParts {
   std::vector<std::uint8_t> bin;
 };
 
-GltfParts parts_of(const scenegen::SceneBuilder& builder, const scenegen::WriteOptions& options = {});
+GltfParts parts_of(const scenegen::SceneBuilder& builder,
+                   const scenegen::WriteOptions& options = {});
 GltfParts split_glb(const std::vector<std::uint8_t>& glb);
 std::vector<std::uint8_t> join_glb(const GltfParts& parts);
 // Writes `parts` as `stem`.gltf with the buffer in `stem`.bin beside it; returns the .gltf path.

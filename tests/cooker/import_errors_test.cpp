@@ -33,7 +33,8 @@ void expect_import_error(const std::string& path, const std::vector<std::string>
 // Accessor index of `semantic` ("POSITION", ...; "indices") of the first primitive of mesh `mesh`.
 int accessor_of(const GltfParts& p, int mesh, const std::string& semantic) {
   const auto& prim = p.json["meshes"][static_cast<size_t>(mesh)]["primitives"][0];
-  return semantic == "indices" ? prim["indices"].get<int>() : prim["attributes"][semantic].get<int>();
+  return semantic == "indices" ? prim["indices"].get<int>()
+                               : prim["attributes"][semantic].get<int>();
 }
 
 nlohmann::ordered_json& node_named(GltfParts& p, const std::string& name) {
@@ -53,13 +54,17 @@ TEST(ImportErrors, EachBrokenSceneNamesItsProblem) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   const std::vector<Case> cases = {
-      {"nan_position", [&](GltfParts& p) { set_float(p, accessor_of(p, 0, "POSITION"), 2, 1, nan); },
+      {"nan_position",
+       [&](GltfParts& p) { set_float(p, accessor_of(p, 0, "POSITION"), 2, 1, nan); },
        {"'floor'", "POSITION 2", "NaN or infinite"}},
-      {"inf_position", [&](GltfParts& p) { set_float(p, accessor_of(p, 2, "POSITION"), 0, 0, -inf); },
+      {"inf_position",
+       [&](GltfParts& p) { set_float(p, accessor_of(p, 2, "POSITION"), 0, 0, -inf); },
        {"'crate'", "POSITION 0", "NaN or infinite"}},
-      {"nan_normal", [&](GltfParts& p) { set_float(p, accessor_of(p, 1, "NORMAL"), 5, 2, nan); },
+      {"nan_normal",
+       [&](GltfParts& p) { set_float(p, accessor_of(p, 1, "NORMAL"), 5, 2, nan); },
        {"'pillar'", "NORMAL 5", "NaN or infinite"}},
-      {"inf_normal", [&](GltfParts& p) { set_float(p, accessor_of(p, 0, "NORMAL"), 0, 1, inf); },
+      {"inf_normal",
+       [&](GltfParts& p) { set_float(p, accessor_of(p, 0, "NORMAL"), 0, 1, inf); },
        {"NORMAL 0", "NaN or infinite"}},
       {"index_past_vertex_count",
        [&](GltfParts& p) { set_index(p, accessor_of(p, 2, "indices"), 4, 999); },
@@ -73,9 +78,7 @@ TEST(ImportErrors, EachBrokenSceneNamesItsProblem) {
       {"missing_buffer_view",
        [&](GltfParts& p) { p.json["accessors"][accessor_of(p, 1, "NORMAL")]["bufferView"] = 77; },
        {"bufferView"}},
-      {"missing_buffer",
-       [&](GltfParts& p) { p.json["bufferViews"][3]["buffer"] = 5; },
-       {"buffer"}},
+      {"missing_buffer", [&](GltfParts& p) { p.json["bufferViews"][3]["buffer"] = 5; }, {"buffer"}},
       {"no_buffers",
        [&](GltfParts& p) {
          p.json.erase("buffers");
@@ -108,9 +111,11 @@ TEST(ImportErrors, EachBrokenSceneNamesItsProblem) {
          node_named(p, "spot")["name"] = "lamp";
        },
        {"semi-dynamic light", "share the name 'lamp'"}},
-      {"unnamed_object", [&](GltfParts& p) { node_named(p, "crate").erase("name"); },
+      {"unnamed_object",
+       [&](GltfParts& p) { node_named(p, "crate").erase("name"); },
        {"semi-dynamic mesh node", "has no name"}},
-      {"unnamed_light", [&](GltfParts& p) { node_named(p, "lamp")["name"] = ""; },
+      {"unnamed_light",
+       [&](GltfParts& p) { node_named(p, "lamp")["name"] = ""; },
        {"semi-dynamic light node", "has no name"}},
       {"node_cycle",
        [&](GltfParts& p) {
@@ -119,7 +124,9 @@ TEST(ImportErrors, EachBrokenSceneNamesItsProblem) {
        },
        {"reached twice"}},
       {"missing_light",
-       [&](GltfParts& p) { node_named(p, "lamp")["extensions"]["KHR_lights_punctual"]["light"] = 9; },
+       [&](GltfParts& p) {
+         node_named(p, "lamp")["extensions"]["KHR_lights_punctual"]["light"] = 9;
+       },
        {"'lamp'", "missing light 9"}},
       {"spot_cones_reversed",
        [&](GltfParts& p) {
@@ -129,13 +136,17 @@ TEST(ImportErrors, EachBrokenSceneNamesItsProblem) {
        },
        {"'spot'", "cone"}},
       {"negative_intensity",
-       [&](GltfParts& p) { p.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = -2.0; },
+       [&](GltfParts& p) {
+         p.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = -2.0;
+       },
        {"'lamp'", "intensity"}},
       {"negative_light_radius",
        [&](GltfParts& p) { node_named(p, "lamp")["extras"]["lightRadius"] = -1.0; },
        {"lightRadius"}},
       {"nan_translation",
-       [&](GltfParts& p) { node_named(p, "pillar")["translation"] = {1.0, 1e39, 0.0}; },
+       [&](GltfParts& p) {
+         node_named(p, "pillar")["translation"] = {1.0, 1e39, 0.0};
+       },
        {"'pillar'", "non-finite transform"}},
       {"position_is_vec2",
        [&](GltfParts& p) { p.json["accessors"][accessor_of(p, 0, "POSITION")]["type"] = "VEC2"; },
@@ -189,9 +200,12 @@ TEST(ImportErrors, TruncatedGlbAtEveryLengthIsAnError) {
   for (size_t cut = 0; cut < glb.size(); cut += (cut < 24 || cut + 16 > glb.size()) ? 1 : 41) {
     SCOPED_TRACE("cut at " + std::to_string(cut) + " of " + std::to_string(glb.size()));
     write_bytes(path, std::vector<std::uint8_t>(glb.begin(), glb.begin() + static_cast<long>(cut)));
-    if (cut == 0) expect_import_error(path, {"empty"});
-    else if (cut < 4) expect_import_error(path, {"invalid glTF"});  // not even the magic
-    else expect_import_error(path, {"invalid glTF binary", "truncated"});
+    if (cut == 0)
+      expect_import_error(path, {"empty"});
+    else if (cut < 4)
+      expect_import_error(path, {"invalid glTF"});  // not even the magic
+    else
+      expect_import_error(path, {"invalid glTF binary", "truncated"});
     ++checked;
   }
   EXPECT_GT(checked, 50u);
@@ -227,8 +241,9 @@ TEST(ImportErrors, InvalidJson) {
 TEST(ImportErrors, DeeplyNestedJsonIsRefusedNotACrash) {
   ScratchDir dir;
   const std::string deep(100000, '[');
-  write_text(dir.file("deep.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"extras\": " + deep +
-                                        std::string(100000, ']') + "}]}");
+  write_text(dir.file("deep.gltf"),
+             "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"extras\": " + deep +
+                 std::string(100000, ']') + "}]}");
   expect_import_error(dir.file("deep.gltf"), {"deep.gltf", "nested deeper"});
   GltfParts parts = parts_of(small_room());
   nlohmann::ordered_json v = 1;
@@ -280,7 +295,8 @@ TEST(ImportErrors, Texcoord1OutsideTheUnitSquare) {
   expect_import_error(dir.file("outside.glb"), {"'tile'", "TEXCOORD_1 3", "outside [0,1]"});
 
   GltfParts parts = parts_of(b);
-  set_float(parts, accessor_of(parts, 0, "TEXCOORD_1"), 3, 1, std::numeric_limits<float>::quiet_NaN());
+  set_float(parts, accessor_of(parts, 0, "TEXCOORD_1"), 3, 1,
+            std::numeric_limits<float>::quiet_NaN());
   expect_import_error(write_glb(dir, "nan_uv1", parts), {"TEXCOORD_1 3", "outside [0,1]"});
 }
 
@@ -292,7 +308,8 @@ void expect_layout_error(const std::string& path, const std::vector<std::string>
     ADD_FAILURE() << "layout built (" << l.width << "x" << l.height << ")";
   } catch (const cooker::CookError& e) {
     for (const std::string& w : words)
-      EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << "'" << w << "' not in: " << e.what();
+      EXPECT_NE(std::string(e.what()).find(w), std::string::npos)
+          << "'" << w << "' not in: " << e.what();
   }
 }
 

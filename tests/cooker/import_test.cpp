@@ -65,20 +65,24 @@ glm::mat4 trs(glm::vec3 t, glm::quat r, glm::vec3 s) {
 TEST(ImportGltf, FlattensHierarchyWithTrsAndMatrices) {
   ScratchDir dir;
   sg::SceneBuilder b;
-  const int quad = b.add_mesh("quad", sg::make_quad({0, 0, 0}, {1, 0, 0}, {1, 0, -1}, {0, 0, -1}), -1);
+  const int quad =
+      b.add_mesh("quad", sg::make_quad({0, 0, 0}, {1, 0, 0}, {1, 0, -1}, {0, 0, -1}), -1);
   const glm::quat r_parent = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 1, 0));
-  const int parent = b.add_node({.name = "parent", .translation = {1, 2, 3}, .rotation = r_parent,
-                                 .scale = {2, 2, 2}});
+  const int parent = b.add_node(
+      {.name = "parent", .translation = {1, 2, 3}, .rotation = r_parent, .scale = {2, 2, 2}});
   const glm::mat4 mid_matrix =
       trs({0, 1, 0}, glm::angleAxis(glm::radians(30.0f), glm::vec3(1, 0, 0)), {1, 1, 0.5f});
   const int mid = b.add_node({.name = "mid", .matrix = mid_matrix});
   const int leaf = b.add_node({.name = "leaf", .translation = {0.5f, 0, 0}, .mesh = quad});
-  const int beam_light = b.add_light({.name = "beam", .type = sg::LightType::kSpot, .intensity = 3,
-                                      .inner_cone_angle = 0.1f, .outer_cone_angle = 0.4f});
+  const int beam_light = b.add_light({.name = "beam",
+                                      .type = sg::LightType::kSpot,
+                                      .intensity = 3,
+                                      .inner_cone_angle = 0.1f,
+                                      .outer_cone_angle = 0.4f});
   const int beam = b.add_node({.name = "beam", .translation = {0, 0, 1}, .light = beam_light});
   // A mirrored node: the importer must keep its front faces front.
-  const int mirror = b.add_node({.name = "mirror", .translation = {5, 0, 0}, .scale = {-1, 1, 1},
-                                 .mesh = quad});
+  const int mirror =
+      b.add_node({.name = "mirror", .translation = {5, 0, 0}, .scale = {-1, 1, 1}, .mesh = quad});
   b.add_child(parent, mid);
   b.add_child(mid, leaf);
   b.add_child(mid, beam);
@@ -89,14 +93,16 @@ TEST(ImportGltf, FlattensHierarchyWithTrsAndMatrices) {
   const Scene s = cooker::import_gltf(path);
   ASSERT_EQ(s.meshes.size(), 2u);
   const glm::mat4 parent_m = trs({1, 2, 3}, r_parent, {2, 2, 2});
-  const glm::mat4 leaf_world = parent_m * mid_matrix * trs({0.5f, 0, 0}, glm::quat(1, 0, 0, 0), {1, 1, 1});
+  const glm::mat4 leaf_world =
+      parent_m * mid_matrix * trs({0.5f, 0, 0}, glm::quat(1, 0, 0, 0), {1, 1, 1});
   const auto& leaf_mesh = mesh_named(s, "leaf");
   const sg::Geometry g = sg::make_quad({0, 0, 0}, {1, 0, 0}, {1, 0, -1}, {0, 0, -1});
   ASSERT_EQ(leaf_mesh.positions.size(), g.positions.size());
   for (size_t i = 0; i < g.positions.size(); ++i) {
     expect_near(leaf_mesh.positions[i], glm::vec3(leaf_world * glm::vec4(g.positions[i], 1.0f)),
                 1e-5f, "leaf vertex " + std::to_string(i));
-    const glm::vec3 n = glm::normalize(glm::transpose(glm::inverse(glm::mat3(leaf_world))) * g.normals[i]);
+    const glm::vec3 n =
+        glm::normalize(glm::transpose(glm::inverse(glm::mat3(leaf_world))) * g.normals[i]);
     expect_near(leaf_mesh.normals[i], n, 1e-5f, "leaf normal " + std::to_string(i));
   }
   // The parent's uniform scale of 2 and mid's z scale of 0.5: world-space lengths follow.
@@ -122,14 +128,25 @@ TEST(ImportGltf, ReadsPunctualLightsWithTheirUnits) {
   ScratchDir dir;
   sg::SceneBuilder b;
   b.add_mesh_node("floor", sg::make_plane(4, 4), -1);
-  b.add_light_node("bulb", {.name = "bulb", .type = sg::LightType::kPoint, .color = {1.0f, 0.5f, 0.25f},
-                            .intensity = 12.5f, .range = 7.0f},
+  b.add_light_node("bulb",
+                   {.name = "bulb",
+                    .type = sg::LightType::kPoint,
+                    .color = {1.0f, 0.5f, 0.25f},
+                    .intensity = 12.5f,
+                    .range = 7.0f},
                    {0, 2, 0}, {0, -1, 0}, /*semi_dynamic=*/true, /*light_radius=*/0.05f);
-  b.add_light_node("cone", {.name = "cone", .type = sg::LightType::kSpot, .intensity = 800.0f,
-                            .inner_cone_angle = 0.25f, .outer_cone_angle = 0.5f},
+  b.add_light_node("cone",
+                   {.name = "cone",
+                    .type = sg::LightType::kSpot,
+                    .intensity = 800.0f,
+                    .inner_cone_angle = 0.25f,
+                    .outer_cone_angle = 0.5f},
                    {1, 3, 0}, {1, -1, 0});
-  b.add_light_node("sun", {.name = "sun", .type = sg::LightType::kDirectional, .color = {0.9f, 0.9f, 1.0f},
-                           .intensity = 3.5f},
+  b.add_light_node("sun",
+                   {.name = "sun",
+                    .type = sg::LightType::kDirectional,
+                    .color = {0.9f, 0.9f, 1.0f},
+                    .intensity = 3.5f},
                    {0, 10, 0}, {0.3f, -1.0f, -0.2f}, /*semi_dynamic=*/true);
   const std::string path = dir.file("lights.gltf");
   b.write(path);
@@ -166,8 +183,10 @@ TEST(ImportGltf, MaterialsGiveAlbedoAndEmission) {
   ScratchDir dir;
   sg::SceneBuilder b;
   const int paint = b.add_material({.name = "paint", .base_color = {0.2f, 0.4f, 0.6f, 1.0f}});
-  const int glow = b.add_material({.name = "glow", .base_color = {0.1f, 0.1f, 0.1f, 1.0f},
-                                   .emissive = {0.5f, 0.25f, 1.0f}, .emissive_strength = 4.0f});
+  const int glow = b.add_material({.name = "glow",
+                                   .base_color = {0.1f, 0.1f, 0.1f, 1.0f},
+                                   .emissive = {0.5f, 0.25f, 1.0f},
+                                   .emissive_strength = 4.0f});
   const int dim = b.add_material({.name = "dim", .emissive = {0.5f, 0.5f, 0.5f}});
   b.add_mesh_node("wall", sg::make_quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}), paint);
   b.add_mesh_node("panel", sg::make_quad({0, 2, 0}, {1, 2, 0}, {1, 3, 0}, {0, 3, 0}), glow);
@@ -194,13 +213,16 @@ std::vector<std::uint8_t> png(int w, int h, const std::vector<std::uint8_t>& rgb
   stbi_write_png_to_func(
       [](void* ctx, void* data, int size) {
         auto* v = static_cast<std::vector<std::uint8_t>*>(ctx);
-        v->insert(v->end(), static_cast<std::uint8_t*>(data), static_cast<std::uint8_t*>(data) + size);
+        v->insert(v->end(), static_cast<std::uint8_t*>(data),
+                  static_cast<std::uint8_t*>(data) + size);
       },
       &out, w, h, 3, rgb.data(), w * 3);
   return out;
 }
 
-float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+float srgb(float c) {
+  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
 
 TEST(ImportGltf, BaseColourTextureIsDecodedToLinear) {
   ScratchDir dir;
@@ -208,8 +230,8 @@ TEST(ImportGltf, BaseColourTextureIsDecodedToLinear) {
   const int mat = b.add_material({.name = "tiles", .base_color = {0.5f, 1.0f, 1.0f, 1.0f}});
   b.add_mesh_node("floor", sg::make_plane(2, 2, 1, 1, /*with_uv=*/true), mat);
   GltfParts parts = parts_of(b);
-  const std::vector<std::uint8_t> pixels = {255, 0, 0,  0, 128, 255,  //
-                                            10, 20, 30, 200, 200, 200};
+  const std::vector<std::uint8_t> pixels = {255, 0,  0,  0,   128, 255,  //
+                                            10,  20, 30, 200, 200, 200};
   parts.json["images"] = {{{"uri", "data:image/png;base64," + base64(png(2, 2, pixels))}}};
   parts.json["textures"] = {{{"source", 0}}};
   parts.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
@@ -338,16 +360,23 @@ TEST(ImportGltf, DracoDecodesToTheSameSurfaceWithinQuantization) {
     EXPECT_EQ(p.indices.size(), d.indices.size());
     glm::vec3 plo(1e30f), phi(-1e30f), dlo(1e30f), dhi(-1e30f);
     double parea = 0, darea = 0;
-    for (const auto& q : p.positions) { plo = glm::min(plo, q); phi = glm::max(phi, q); }
-    for (const auto& q : d.positions) { dlo = glm::min(dlo, q); dhi = glm::max(dhi, q); }
+    for (const auto& q : p.positions) {
+      plo = glm::min(plo, q);
+      phi = glm::max(phi, q);
+    }
+    for (const auto& q : d.positions) {
+      dlo = glm::min(dlo, q);
+      dhi = glm::max(dhi, q);
+    }
     const float tol = glm::length(phi - plo) / float(1 << 13);
     expect_near(plo, dlo, tol, p.name + " bounds min");
     expect_near(phi, dhi, tol, p.name + " bounds max");
     auto area = [](const cooker::MeshInstance& m) {
       double a = 0;
       for (size_t t = 0; t < m.indices.size(); t += 3)
-        a += 0.5 * glm::length(glm::cross(m.positions[m.indices[t + 1]] - m.positions[m.indices[t]],
-                                          m.positions[m.indices[t + 2]] - m.positions[m.indices[t]]));
+        a += 0.5 *
+             glm::length(glm::cross(m.positions[m.indices[t + 1]] - m.positions[m.indices[t]],
+                                    m.positions[m.indices[t + 2]] - m.positions[m.indices[t]]));
       return a;
     };
     parea = area(p);
@@ -372,8 +401,9 @@ TEST(ImportGltf, SpotWithInnerEqualToOuterImportsAsAHardCone) {
   ASSERT_EQ(spot["type"], "spot");
   spot["spot"] = {{"innerConeAngle", 0.6}, {"outerConeAngle", 0.6}};
   const Scene s = cooker::import_gltf(write_glb(dir, "hard_spot", p));
-  const auto it = std::find_if(s.lights.begin(), s.lights.end(),
-                               [](const cooker::Light& l) { return l.type == cooker::LightType::kSpot; });
+  const auto it = std::find_if(s.lights.begin(), s.lights.end(), [](const cooker::Light& l) {
+    return l.type == cooker::LightType::kSpot;
+  });
   ASSERT_NE(it, s.lights.end());
   EXPECT_FLOAT_EQ(it->inner_cone, 0.6f);
   EXPECT_FLOAT_EQ(it->outer_cone, 0.6f);

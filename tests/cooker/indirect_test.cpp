@@ -58,8 +58,8 @@ FurnaceResult furnace(float rho, const BakeOptions& o, int n, bool semi = false)
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
   Report report;
-  const BakedMaps maps =
-      bake_maps(s, test::bare_layout(texels.width, texels.height), texels, *tracer, o, progress, report);
+  const BakedMaps maps = bake_maps(s, test::bare_layout(texels.width, texels.height), texels,
+                                   *tracer, o, progress, report);
   FurnaceResult r;
   for (size_t t = 0; t < texels.position.size(); ++t) {
     const int x = int(t % size_t(texels.width)), y = int(t / size_t(texels.width));
@@ -103,7 +103,8 @@ TEST(Indirect, AlbedoNearOneStaysFinite) {
   EXPECT_LT(r.flux, 1.2 * expected);
 }
 
-bool has_decision(Report& report, const std::string& what, bool taken, const std::string& in_reason) {
+bool has_decision(Report& report, const std::string& what, bool taken,
+                  const std::string& in_reason) {
   for (const auto& d : report.root()["decisions"]) {
     if (d["what"].get<std::string>() == what && d["taken"].get<bool>() == taken &&
         d["reason"].get<std::string>().find(in_reason) != std::string::npos) {
@@ -126,7 +127,8 @@ TEST(Indirect, LostPhotonsAreReportedNotLoopedOn) {
   Report report;
   BakeOptions o;
   o.quality = Quality::kDraft;
-  const BakedMaps maps = bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
+  const BakedMaps maps =
+      bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
   EXPECT_TRUE(has_decision(report, "indirect light: static lights", false, "left the scene"));
   EXPECT_TRUE(has_decision(report, "indirect light: up", false, "left the scene"));
   ASSERT_EQ(maps.contribution.size(), 1u);
@@ -151,7 +153,8 @@ struct ColourScene {
     // Red wall at x = -2 facing +x; white wall at z = -2 facing +z.
     test::add_quad(scene, {-2, 0, -2}, {-2, 2, -2}, {-2, 2, 2}, {-2, 0, 2}, "red", -1, 1);
     test::add_quad(scene, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, "white", -1, 2);
-    scene.lights = {test::spot_light("spot", {0.0f, 1.0f, 0.5f}, {-1, 0, 0}, 20.0f, 0.2f, 0.35f, true)};
+    scene.lights = {
+        test::spot_light("spot", {0.0f, 1.0f, 0.5f}, {-1, 0, 0}, 20.0f, 0.2f, 0.35f, true)};
     test::finish(scene);
     texels = test::grid_texels(16, 8, {-2, 0, -2}, {4, 0, 0}, {0, 2, 0}, {0, 0, 1});
   }
@@ -196,7 +199,8 @@ TEST(Indirect, ColourBleedingFollowsTheLight) {
     lo.has_intensity = true;
     lo.intensity = st.intensity;
     state.lights["spot"] = lo;
-    const FloatImage direct = bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+    const FloatImage direct =
+        bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
     double rr = 0.0, gg = 0.0;
     for (int y = 0; y < 8; ++y) {
       for (int x = 0; x < 16; ++x) {
@@ -276,7 +280,8 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
     lo.color[1] = 0.7f;
     lo.color[2] = 0.4f;
     state.lights["lamp"] = lo;
-    const FloatImage direct = bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+    const FloatImage direct =
+        bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
     float worst = 0.0f, peak = 0.0f;
     for (int y = 0; y < f.texels.height; ++y) {
       for (int x = 0; x < f.texels.width; ++x) {
@@ -303,7 +308,8 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
   EXPECT_EQ(a.base.data, b.base.data);
   EXPECT_EQ(a.contribution[0].data, b.contribution[0].data);
   ASSERT_EQ(a.shadows.size(), b.shadows.size());
-  for (size_t k = 0; k < a.shadows.size(); ++k) EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
+  for (size_t k = 0; k < a.shadows.size(); ++k)
+    EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
 }
 
 }  // namespace

@@ -14,8 +14,8 @@ namespace lightpatch::cooker {
 namespace {
 
 std::string temp_dir() {
-  const std::string d = std::filesystem::temp_directory_path().string() + "/lp_io_test_" +
-                        std::to_string(::getpid());
+  const std::string d =
+      std::filesystem::temp_directory_path().string() + "/lp_io_test_" + std::to_string(::getpid());
   std::filesystem::create_directories(d);
   return d;
 }

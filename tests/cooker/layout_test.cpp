@@ -127,7 +127,8 @@ TEST(Layout, DeterministicInsideThePageAndWithoutOverlaps) {
       EXPECT_LT(ml.source_vertex[v], s.meshes[m].positions.size());
   }
   for (size_t i = 0; i < all.size(); i += 3)
-    for (size_t j = i + 3; j < all.size(); j += 3) ASSERT_FALSE(overlap(&all[i], &all[j])) << i << " " << j;
+    for (size_t j = i + 3; j < all.size(); j += 3)
+      ASSERT_FALSE(overlap(&all[i], &all[j])) << i << " " << j;
 }
 
 TEST(Layout, DensityGivesChartSizeAndIsLoweredToFitWithANote) {
@@ -283,10 +284,14 @@ void sealed_room_stays_dark(bool single_sided) {
   EXPECT_EQ(inside, 0.0f);
 }
 
-TEST(Texels, SealedRoomOfSolidWallsLitFromOutsideStaysDark) { sealed_room_stays_dark(false); }
+TEST(Texels, SealedRoomOfSolidWallsLitFromOutsideStaysDark) {
+  sealed_room_stays_dark(false);
+}
 
 // Zero-thickness walls: texels straddling a corner must not sample the outside.
-TEST(Texels, SealedRoomOfSingleSidedWallsLitFromOutsideStaysDark) { sealed_room_stays_dark(true); }
+TEST(Texels, SealedRoomOfSingleSidedWallsLitFromOutsideStaysDark) {
+  sealed_room_stays_dark(true);
+}
 
 TEST(Texels, EveryValidTexelLiesOnTheSurfaceWithAUnitNormal) {
   const Scene s = props_scene();

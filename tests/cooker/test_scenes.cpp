@@ -50,15 +50,22 @@ int add_box(Scene& scene, const glm::vec3& lo, const glm::vec3& hi, const std::s
 void add_closed_room(Scene& scene, const glm::vec3& lo, const glm::vec3& hi, float wall,
                      const std::string& name) {
   // Floor, ceiling, and four walls as slabs that overlap at the edges.
-  add_box(scene, {lo.x - wall, lo.y - wall, lo.z - wall}, {hi.x + wall, lo.y, hi.z + wall}, name + "_0");
-  add_box(scene, {lo.x - wall, hi.y, lo.z - wall}, {hi.x + wall, hi.y + wall, hi.z + wall}, name + "_1");
-  add_box(scene, {lo.x - wall, lo.y - wall, lo.z - wall}, {lo.x, hi.y + wall, hi.z + wall}, name + "_2");
-  add_box(scene, {hi.x, lo.y - wall, lo.z - wall}, {hi.x + wall, hi.y + wall, hi.z + wall}, name + "_3");
-  add_box(scene, {lo.x - wall, lo.y - wall, lo.z - wall}, {hi.x + wall, hi.y + wall, lo.z}, name + "_4");
-  add_box(scene, {lo.x - wall, lo.y - wall, hi.z}, {hi.x + wall, hi.y + wall, hi.z + wall}, name + "_5");
+  add_box(scene, {lo.x - wall, lo.y - wall, lo.z - wall}, {hi.x + wall, lo.y, hi.z + wall},
+          name + "_0");
+  add_box(scene, {lo.x - wall, hi.y, lo.z - wall}, {hi.x + wall, hi.y + wall, hi.z + wall},
+          name + "_1");
+  add_box(scene, {lo.x - wall, lo.y - wall, lo.z - wall}, {lo.x, hi.y + wall, hi.z + wall},
+          name + "_2");
+  add_box(scene, {hi.x, lo.y - wall, lo.z - wall}, {hi.x + wall, hi.y + wall, hi.z + wall},
+          name + "_3");
+  add_box(scene, {lo.x - wall, lo.y - wall, lo.z - wall}, {hi.x + wall, hi.y + wall, lo.z},
+          name + "_4");
+  add_box(scene, {lo.x - wall, lo.y - wall, hi.z}, {hi.x + wall, hi.y + wall, hi.z + wall},
+          name + "_5");
 }
 
-int add_object_box(Scene& scene, const glm::vec3& lo, const glm::vec3& hi, const std::string& name) {
+int add_object_box(Scene& scene, const glm::vec3& lo, const glm::vec3& hi,
+                   const std::string& name) {
   Object o;
   o.name = name;
   scene.objects.push_back(o);
@@ -116,7 +123,8 @@ TexelSet grid_texels(int w, int h, const glm::vec3& origin, const glm::vec3& u, 
   t.region.assign(count, 0);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      t.position[t.index(x, y)] = origin + u * ((static_cast<float>(x) + 0.5f) / static_cast<float>(w)) +
+      t.position[t.index(x, y)] = origin +
+                                  u * ((static_cast<float>(x) + 0.5f) / static_cast<float>(w)) +
                                   v * ((static_cast<float>(y) + 0.5f) / static_cast<float>(h));
     }
   }

@@ -18,8 +18,8 @@ int add_quad(cooker::Scene& scene, const glm::vec3& p0, const glm::vec3& p1, con
              const glm::vec3& p3, const std::string& name, int object = -1, int material = 0);
 
 // Adds an axis-aligned box (12 triangles, normals facing out) as one mesh.
-int add_box(cooker::Scene& scene, const glm::vec3& lo, const glm::vec3& hi,
-            const std::string& name, int object = -1, int material = 0);
+int add_box(cooker::Scene& scene, const glm::vec3& lo, const glm::vec3& hi, const std::string& name,
+            int object = -1, int material = 0);
 
 // Adds a closed room: six inward-facing walls of a box (one mesh per wall, named name_0..5) with
 // walls of thickness `wall` (each wall is a solid slab, so the room is sealed).

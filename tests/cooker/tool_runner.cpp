@@ -63,7 +63,6 @@ ToolRun run_tool(const std::vector<std::string>& args) {
   return r;
 }
 
-
 std::string describe(const std::vector<std::string>& args, const ToolRun& r) {
   std::string s = "lightpatch";
   for (const auto& a : args) s += " " + a;

@@ -2,8 +2,8 @@
 // packs it accepts, every accessor and a CPU recomposition of two states, which must stay within
 // what open() validated.
 #include <cstddef>
-#include <cstdlib>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -29,7 +29,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const auto* entries = reinterpret_cast<const pack::SectionEntry*>(bytes + sizeof(pack::Header));
     uint32_t crc = crc32(entries, uint64_t(h.section_count) * sizeof(pack::SectionEntry));
     for (uint32_t i = 0; i < h.section_count; ++i) {
-      if (entries[i].type == pack::kSectionAtlasData || entries[i].type == pack::kSectionMeshData) continue;
+      if (entries[i].type == pack::kSectionAtlasData || entries[i].type == pack::kSectionMeshData)
+        continue;
       crc = crc32(bytes + entries[i].offset, entries[i].length, crc);
     }
     std::memcpy(bytes + offsetof(pack::Header, table_checksum), &crc, 4);

@@ -170,8 +170,8 @@ TEST_P(CookedScene, CpuRecomposeMatchesBakeStateForRandomStates) {
     ASSERT_EQ(cpu.rebuild(st.runtime), Status::kOk);
     Progress progress(true);
     Report report;
-    FloatImage want = bake_state(c_.scene, c_.layout, c_.texels, *c_.tracer, st.spec, draft(),
-                                 progress, report);
+    FloatImage want =
+        bake_state(c_.scene, c_.layout, c_.texels, *c_.tracer, st.spec, draft(), progress, report);
     finalize_map(want, c_.scene, c_.layout, c_.texels);
     const double e = relative_rmse(cpu.rgb(), want, c_.texels);
     EXPECT_LT(e, 0.01) << "trial " << trial;
@@ -263,7 +263,8 @@ TEST(OverlappingShadows, FourVisibilityCombinationsMatchBakeStateOnCpuAndGles) {
       for (int k = 0; k < 3; ++k) rgb[i * 3 + size_t(k)] = rgba[i * 4 + size_t(k)];
     Progress progress(true);
     Report report;
-    FloatImage want = bake_state(c.scene, c.layout, c.texels, *c.tracer, spec, draft(), progress, report);
+    FloatImage want =
+        bake_state(c.scene, c.layout, c.texels, *c.tracer, spec, draft(), progress, report);
     finalize_map(want, c.scene, c.layout, c.texels);
     EXPECT_LT(relative_rmse(cpu.rgb(), want, c.texels), 0.01) << "cpu, combination " << combo;
     EXPECT_LT(relative_rmse(rgb.data(), want, c.texels), 0.01) << "gles, combination " << combo;

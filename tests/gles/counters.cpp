@@ -22,9 +22,13 @@ Counters& counters() {
   return c;
 }
 #if defined(LP_ASAN)
-bool malloc_counted() { return false; }
+bool malloc_counted() {
+  return false;
+}
 #else
-bool malloc_counted() { return true; }
+bool malloc_counted() {
+  return true;
+}
 #endif
 }  // namespace lightpatch::testing
 
@@ -62,10 +66,18 @@ void* operator new[](size_t n, const std::nothrow_t&) noexcept {
   count_new();
   return std::malloc(n ? n : 1);
 }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, size_t) noexcept { std::free(p); }
-void operator delete[](void* p, size_t) noexcept { std::free(p); }
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, size_t) noexcept {
+  std::free(p);
+}
 
 #if !defined(LP_ASAN)
 // malloc family through glibc's internal entry points. Only calls made from this executable (the
@@ -108,11 +120,11 @@ void* realloc(void* p, size_t n) {
 
 // GL object creation.
 extern "C" {
-#define LP_GEN(name)                                                 \
-  GL_APICALL void GL_APIENTRY name(GLsizei n, GLuint* out) {        \
-    count_gl();                                                      \
+#define LP_GEN(name)                                                      \
+  GL_APICALL void GL_APIENTRY name(GLsizei n, GLuint* out) {              \
+    count_gl();                                                           \
     static auto real = next<void(GL_APIENTRY*)(GLsizei, GLuint*)>(#name); \
-    real(n, out);                                                    \
+    real(n, out);                                                         \
   }
 LP_GEN(glGenTextures)
 LP_GEN(glGenBuffers)

@@ -226,7 +226,8 @@ TEST_F(Gles, NoAllocationAndNoGlObjectCreationPerFrame) {
       const uint32_t ob = picks[i + 1] % pack_.object_count();
       runtime_.set_object_visible(ob, !runtime_.object_visible(ob));
     } else {
-      LightState s{picks[i + 1] % 4 != 0, {float(picks[i + 2] % 7) / 7.0f, 0.5f, 0.25f},
+      LightState s{picks[i + 1] % 4 != 0,
+                   {float(picks[i + 2] % 7) / 7.0f, 0.5f, 0.25f},
                    float(picks[i + 1] % 5)};
       runtime_.set_light(picks[i] % pack_.light_count(), s);
     }
@@ -268,7 +269,8 @@ TEST_F(Gles, NoDriftAfterTenThousandRandomChanges) {
   settle(kUnlimited);
   const std::vector<float> fresh = read();
   for (size_t i = 0; i < fresh.size(); ++i) {
-    ASSERT_LE(std::fabs(double(fresh[i]) - incremental[i]), bound + 16 * kHalfUlp * magnitude[i] + 1e-6);
+    ASSERT_LE(std::fabs(double(fresh[i]) - incremental[i]),
+              bound + 16 * kHalfUlp * magnitude[i] + 1e-6);
   }
 }
 
@@ -336,7 +338,8 @@ TEST_F(Gles, RowZeroIsTheTopRow) {
   std::vector<double> flipped(want.size());
   const uint32_t w = runtime_.width(), h = runtime_.height();
   for (uint32_t y = 0; y < h; ++y) {
-    for (size_t i = 0; i < size_t(w) * 3; ++i) flipped[size_t(y) * w * 3 + i] = want[size_t(h - 1 - y) * w * 3 + i];
+    for (size_t i = 0; i < size_t(w) * 3; ++i)
+      flipped[size_t(y) * w * 3 + i] = want[size_t(h - 1 - y) * w * 3 + i];
   }
   EXPECT_GT(error_in_ulps(got, flipped, magnitude), 8.0);
 }

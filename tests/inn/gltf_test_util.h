@@ -60,8 +60,9 @@ inline std::vector<std::uint8_t> read_file(const std::filesystem::path& p) {
 // A fresh scratch folder per test (tests run in parallel processes).
 inline std::filesystem::path scratch_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("lightpatch_inn_" + std::string(info->test_suite_name()) + "_" + info->name());
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("lightpatch_inn_" + std::string(info->test_suite_name()) + "_" + info->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -76,9 +77,10 @@ inline std::string validator_dir() {
 // Runs the Khronos glTF validator on `file`; returns the script's exit code (0: no errors) and
 // leaves its report in `file`.report.json and its summary in `file`.log.
 inline int run_validator(const std::filesystem::path& file) {
-  const std::string cmd = std::string("\"") + LIGHTPATCH_NODE + "\" \"" + LIGHTPATCH_VALIDATE_SCRIPT + "\" \"" +
-                          file.string() + "\" \"" + validator_dir() + "\" > \"" + file.string() +
-                          ".report.json\" 2> \"" + file.string() + ".log\"";
+  const std::string cmd = std::string("\"") + LIGHTPATCH_NODE + "\" \"" +
+                          LIGHTPATCH_VALIDATE_SCRIPT + "\" \"" + file.string() + "\" \"" +
+                          validator_dir() + "\" > \"" + file.string() + ".report.json\" 2> \"" +
+                          file.string() + ".log\"";
   const int rc = std::system(cmd.c_str());
   return rc == -1 ? -1 : WEXITSTATUS(rc);
 }

@@ -31,7 +31,8 @@ Summary summarize(const json& j) {
   std::vector<std::size_t> mesh_tris;
   for (const auto& mesh : j["meshes"]) {
     std::size_t t = 0;
-    for (const auto& prim : mesh["primitives"]) t += j["accessors"][prim["indices"].get<int>()]["count"].get<std::size_t>() / 3;
+    for (const auto& prim : mesh["primitives"])
+      t += j["accessors"][prim["indices"].get<int>()]["count"].get<std::size_t>() / 3;
     mesh_tris.push_back(t);
   }
   for (const auto& n : j["nodes"]) {
@@ -43,7 +44,8 @@ Summary summarize(const json& j) {
       s.light_nodes.insert(name);
       if (semi) {
         ++s.semi_lights;
-        s.every_semi_light_has_radius = s.every_semi_light_has_radius && n["extras"].value("lightRadius", 0.0) > 0.0;
+        s.every_semi_light_has_radius =
+            s.every_semi_light_has_radius && n["extras"].value("lightRadius", 0.0) > 0.0;
       } else {
         ++s.static_lights;
       }
@@ -55,12 +57,15 @@ Summary summarize(const json& j) {
   return s;
 }
 
-json load_json(const std::filesystem::path& p) { return json::parse(test::slurp(p)); }
+json load_json(const std::filesystem::path& p) {
+  return json::parse(test::slurp(p));
+}
 
 TEST(InnGenerator, SmallIsDeterministicAndSeedsDiffer) {
   const InnOptions small{InnScale::kSmall, 7};
   EXPECT_EQ(generate_inn(small).scene.to_glb(), generate_inn(small).scene.to_glb());
-  EXPECT_EQ(generate_inn(small).scene.to_glb({.draco = true}), generate_inn(small).scene.to_glb({.draco = true}));
+  EXPECT_EQ(generate_inn(small).scene.to_glb({.draco = true}),
+            generate_inn(small).scene.to_glb({.draco = true}));
   EXPECT_NE(generate_inn(small).scene.to_glb(), generate_inn({InnScale::kSmall, 8}).scene.to_glb());
   EXPECT_EQ(generate_inn(small).scenario.dump(), generate_inn(small).scenario.dump());
 }
@@ -74,8 +79,8 @@ TEST(InnGenerator, FullWrittenTwiceGivesIdenticalFiles) {
   std::filesystem::remove_all(dir);
 }
 
-void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris, std::size_t min_semi_lights,
-               std::size_t min_items) {
+void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris,
+               std::size_t min_semi_lights, std::size_t min_items) {
   const Inn inn = generate_inn({scale, 1});
   const test::Glb glb = test::parse_glb(inn.scene.to_glb());
   const Summary s = summarize(glb.json);
@@ -101,7 +106,8 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris, std::
   }
   // No TEXCOORD_1 (the cooker unwraps); every light the state names exists; most start off.
   for (const auto& mesh : glb.json["meshes"]) {
-    for (const auto& prim : mesh["primitives"]) EXPECT_FALSE(prim["attributes"].contains("TEXCOORD_1"));
+    for (const auto& prim : mesh["primitives"])
+      EXPECT_FALSE(prim["attributes"].contains("TEXCOORD_1"));
   }
   std::size_t off = 0;
   for (const auto& [name, l] : inn.state["lights"].items()) {
@@ -109,8 +115,10 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris, std::
     off += l["on"] == false ? 1u : 0u;
   }
   EXPECT_GT(2 * off, s.semi_lights);
-  for (const auto& [name, o] : inn.state["objects"].items()) EXPECT_TRUE(s.object_nodes.count(name)) << name;
-  // Scenario: every step names a node of the scene; each off light is lit once; ends with the spell.
+  for (const auto& [name, o] : inn.state["objects"].items())
+    EXPECT_TRUE(s.object_nodes.count(name)) << name;
+  // Scenario: every step names a node of the scene; each off light is lit once; ends with the
+  // spell.
   const json& steps = inn.scenario["steps"];
   ASSERT_GE(steps.size(), 3u);
   std::size_t lit = 0, placed = 0;
@@ -127,21 +135,26 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris, std::
   EXPECT_EQ(steps.back()["action"], "spell_done");
 }
 
-TEST(InnGenerator, SmallCounts) { check_inn(InnScale::kSmall, 5000, 10000, 4, 2); }
+TEST(InnGenerator, SmallCounts) {
+  check_inn(InnScale::kSmall, 5000, 10000, 4, 2);
+}
 
-TEST(InnGenerator, FullCounts) { check_inn(InnScale::kFull, 215000, 235000, 12, 6); }
+TEST(InnGenerator, FullCounts) {
+  check_inn(InnScale::kFull, 215000, 235000, 12, 6);
+}
 
 TEST(InnGenerator, FullHasTheRooms) {
   const Inn inn = generate_inn({InnScale::kFull, 1});
   const test::Glb glb = test::parse_glb(inn.scene.to_glb());
   const Summary s = summarize(glb.json);
-  for (const char* room : {"room_dining", "room_corridor", "room_bedroom_1", "room_bedroom_2", "room_cellar",
-                           "room_living_main", "room_living_small", "room_bath"}) {
+  for (const char* room : {"room_dining", "room_corridor", "room_bedroom_1", "room_bedroom_2",
+                           "room_cellar", "room_living_main", "room_living_small", "room_bath"}) {
     EXPECT_TRUE(s.names.count(room)) << room;
   }
   // Spot lights (the fires) and a directional moon are present.
   std::map<std::string, int> types;
-  for (const auto& l : glb.json["extensions"]["KHR_lights_punctual"]["lights"]) ++types[l["type"].get<std::string>()];
+  for (const auto& l : glb.json["extensions"]["KHR_lights_punctual"]["lights"])
+    ++types[l["type"].get<std::string>()];
   EXPECT_GE(types["spot"], 2);
   EXPECT_EQ(types["directional"], 1);
   EXPECT_GE(types["point"], 12);
@@ -179,10 +192,18 @@ void validate(InnScale scale, bool draco) {
   }
 }
 
-TEST(InnValidator, SmallPlain) { validate(InnScale::kSmall, false); }
-TEST(InnValidator, SmallDraco) { validate(InnScale::kSmall, true); }
-TEST(InnValidator, FullPlain) { validate(InnScale::kFull, false); }
-TEST(InnValidator, FullDraco) { validate(InnScale::kFull, true); }
+TEST(InnValidator, SmallPlain) {
+  validate(InnScale::kSmall, false);
+}
+TEST(InnValidator, SmallDraco) {
+  validate(InnScale::kSmall, true);
+}
+TEST(InnValidator, FullPlain) {
+  validate(InnScale::kFull, false);
+}
+TEST(InnValidator, FullDraco) {
+  validate(InnScale::kFull, true);
+}
 
 }  // namespace
 }  // namespace lightpatch::inn

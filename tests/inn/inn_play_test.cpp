@@ -50,22 +50,30 @@ int run(const std::string& command, const std::filesystem::path& log) {
   return rc == -1 ? -1 : WEXITSTATUS(rc);
 }
 
-uint64_t u64(const Row& r, const char* key) { return std::stoull(r.at(key)); }
-double num(const Row& r, const char* key) { return std::stod(r.at(key)); }
+uint64_t u64(const Row& r, const char* key) {
+  return std::stoull(r.at(key));
+}
+double num(const Row& r, const char* key) {
+  return std::stod(r.at(key));
+}
 
 TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
   const std::filesystem::path dir = test::scratch_dir();
   const std::string inn = LIGHTPATCH_INN_BIN, tool = LIGHTPATCH_TOOL_BIN;
   const std::filesystem::path scene = dir / "inn.glb", pack = dir / "inn.lpk", out = dir / "run";
-  ASSERT_EQ(run("\"" + inn + "\" generate --scale small --draco -o \"" + scene.string() + "\"", dir / "generate.log"), 0)
+  ASSERT_EQ(run("\"" + inn + "\" generate --scale small --draco -o \"" + scene.string() + "\"",
+                dir / "generate.log"),
+            0)
       << test::slurp(dir / "generate.log");
-  ASSERT_EQ(run("\"" + tool + "\" cook \"" + scene.string() + "\" -o \"" + pack.string() + "\" --quality draft --quiet",
+  ASSERT_EQ(run("\"" + tool + "\" cook \"" + scene.string() + "\" -o \"" + pack.string() +
+                    "\" --quality draft --quiet",
                 dir / "cook.log"),
             0)
       << test::slurp(dir / "cook.log");
-  const int rc = run("\"" + inn + "\" play --headless --script default --size 320x180 --scene \"" + scene.string() +
-                         "\" --pack \"" + pack.string() + "\" --out \"" + out.string() + "\"",
-                     dir / "play.log");
+  const int rc =
+      run("\"" + inn + "\" play --headless --script default --size 320x180 --scene \"" +
+              scene.string() + "\" --pack \"" + pack.string() + "\" --out \"" + out.string() + "\"",
+          dir / "play.log");
   EXPECT_EQ(rc, 0) << test::slurp(dir / "play.log");
 
   const nlohmann::json scenario = nlohmann::json::parse(test::slurp(dir / "inn.scenario.json"));

@@ -34,7 +34,8 @@ void expect_normals_agree(const Geometry& g) {
     const glm::vec3 c = g.positions[g.indices[i + 2]];
     const glm::vec3 n = glm::cross(b - a, c - a);
     ASSERT_GT(glm::length(n), 0.0f) << "degenerate triangle " << i / 3;
-    for (int k = 0; k < 3; ++k) EXPECT_GT(glm::dot(n, g.normals[g.indices[i + static_cast<std::size_t>(k)]]), 0.0f);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_GT(glm::dot(n, g.normals[g.indices[i + static_cast<std::size_t>(k)]]), 0.0f);
   }
 }
 
@@ -84,8 +85,8 @@ TEST(Shapes, LatheCylinderSphereTorusAreClosedAndOutward) {
 
 TEST(Shapes, TransformKeepsFrontFacesUnderMirroring) {
   const Geometry box = make_box({0, 0, 0}, {1, 1, 1});
-  const Geometry mirrored = box.transformed(glm::mat4(glm::vec4(-1, 0, 0, 0), glm::vec4(0, 2, 0, 0),
-                                                      glm::vec4(0, 0, 1, 0), glm::vec4(0, 0, 0, 1)));
+  const Geometry mirrored = box.transformed(glm::mat4(
+      glm::vec4(-1, 0, 0, 0), glm::vec4(0, 2, 0, 0), glm::vec4(0, 0, 1, 0), glm::vec4(0, 0, 0, 1)));
   EXPECT_NEAR(signed_volume(mirrored), 2.0, 1e-4);
   expect_normals_agree(mirrored);
 }
@@ -104,19 +105,27 @@ TEST(Geometry, CheckAndAppendRejectBadInput) {
 SceneBuilder sample_scene(bool with_uv1) {
   SceneBuilder b;
   const int wood = b.add_material({.name = "wood", .base_color = {0.5f, 0.3f, 0.15f, 1.0f}});
-  const int glow = b.add_material({.name = "glow", .emissive = {1, 0.5f, 0.2f}, .emissive_strength = 5});
+  const int glow =
+      b.add_material({.name = "glow", .emissive = {1, 0.5f, 0.2f}, .emissive_strength = 5});
   Geometry room = make_box({-3, 0, -3}, {3, 3, 3}, Facing::kInward, 2);
   room.append(make_rounded_box({-1, 0, -0.5f}, {1, 0.8f, 0.5f}, 0.05f, 1));
   if (with_uv1) {
     room.uv1.resize(room.positions.size());
-    for (std::size_t i = 0; i < room.uv1.size(); ++i) room.uv1[i] = glm::vec2(room.positions[i].x, room.positions[i].z) / 8.0f + 0.5f;
+    for (std::size_t i = 0; i < room.uv1.size(); ++i)
+      room.uv1[i] = glm::vec2(room.positions[i].x, room.positions[i].z) / 8.0f + 0.5f;
   }
   b.add_node({.name = "room", .mesh = b.add_mesh("room", room, wood)});
   b.add_mesh_node("lamp", make_sphere(0.1f), glow, {0, 2, 0}, true);
-  b.add_light_node("candle", {.type = LightType::kPoint, .intensity = 2.0f, .range = 5.0f}, {0, 1, 0}, {0, -1, 0}, true, 0.02f);
-  b.add_light_node("spot", {.type = LightType::kSpot, .intensity = 20, .inner_cone_angle = 0.2f, .outer_cone_angle = 0.5f},
+  b.add_light_node("candle", {.type = LightType::kPoint, .intensity = 2.0f, .range = 5.0f},
+                   {0, 1, 0}, {0, -1, 0}, true, 0.02f);
+  b.add_light_node("spot",
+                   {.type = LightType::kSpot,
+                    .intensity = 20,
+                    .inner_cone_angle = 0.2f,
+                    .outer_cone_angle = 0.5f},
                    {0, 2.5f, 0}, {1, -1, 0});
-  b.add_light_node("moon", {.type = LightType::kDirectional, .intensity = 0.5f}, {0, 5, 0}, {0.3f, -1, 0.2f});
+  b.add_light_node("moon", {.type = LightType::kDirectional, .intensity = 0.5f}, {0, 5, 0},
+                   {0.3f, -1, 0.2f});
   return b;
 }
 
@@ -128,7 +137,8 @@ TEST(SceneBuilder, GlbStructureMinMaxAlignmentAndExtras) {
   EXPECT_EQ(j["buffers"][0]["byteLength"].get<std::size_t>(), glb.bin.size());
   for (const auto& v : j["bufferViews"]) {
     EXPECT_EQ(v["byteOffset"].get<std::size_t>() % 4, 0u);
-    EXPECT_LE(v["byteOffset"].get<std::size_t>() + v["byteLength"].get<std::size_t>(), glb.bin.size());
+    EXPECT_LE(v["byteOffset"].get<std::size_t>() + v["byteLength"].get<std::size_t>(),
+              glb.bin.size());
     EXPECT_FALSE(v.contains("byteStride"));
   }
   // POSITION min/max equal the data's bounds.
@@ -147,7 +157,8 @@ TEST(SceneBuilder, GlbStructureMinMaxAlignmentAndExtras) {
   EXPECT_EQ(candle["extras"]["semiDynamic"], true);
   EXPECT_FLOAT_EQ(candle["extras"]["lightRadius"].get<float>(), 0.02f);
   EXPECT_EQ(j["nodes"][1]["extras"]["semiDynamic"], true);
-  EXPECT_EQ(j["extensionsUsed"], nlohmann::json({"KHR_lights_punctual", "KHR_materials_emissive_strength"}));
+  EXPECT_EQ(j["extensionsUsed"],
+            nlohmann::json({"KHR_lights_punctual", "KHR_materials_emissive_strength"}));
   EXPECT_FALSE(j.contains("extensionsRequired"));
   // The spot shines along its node's −Z: the rotation maps −Z to (1, −1, 0)/√2.
   const auto& r = j["nodes"][3]["rotation"];
@@ -172,8 +183,9 @@ TEST(SceneBuilder, DracoPrimitivesDecodeToTheAccessorCounts) {
       EXPECT_FALSE(view.contains("byteStride"));
       EXPECT_FALSE(view.contains("target"));
       draco::DecoderBuffer buffer;
-      buffer.Init(reinterpret_cast<const char*>(glb.bin.data()) + view["byteOffset"].get<std::size_t>(),
-                  view["byteLength"].get<std::size_t>());
+      buffer.Init(
+          reinterpret_cast<const char*>(glb.bin.data()) + view["byteOffset"].get<std::size_t>(),
+          view["byteLength"].get<std::size_t>());
       draco::Decoder decoder;
       auto result = decoder.DecodeMeshFromBuffer(&buffer);
       ASSERT_TRUE(result.ok()) << result.status().error_msg();
@@ -182,7 +194,8 @@ TEST(SceneBuilder, DracoPrimitivesDecodeToTheAccessorCounts) {
       EXPECT_FALSE(pos.contains("bufferView"));
       EXPECT_EQ(pos["count"].get<std::size_t>(), mesh_out.num_points());
       EXPECT_TRUE(pos.contains("min"));
-      EXPECT_EQ(j["accessors"][prim["indices"].get<int>()]["count"].get<std::size_t>(), 3u * mesh_out.num_faces());
+      EXPECT_EQ(j["accessors"][prim["indices"].get<int>()]["count"].get<std::size_t>(),
+                3u * mesh_out.num_faces());
       for (const auto& [semantic, id] : ext["attributes"].items()) {
         EXPECT_TRUE(prim["attributes"].contains(semantic));
         EXPECT_NE(mesh_out.GetAttributeByUniqueId(id.get<std::uint32_t>()), nullptr) << semantic;
@@ -203,8 +216,9 @@ TEST(SceneBuilder, RejectsBadInput) {
   EXPECT_THROW(b.add_material({.name = "hot", .base_color = {2, 0, 0, 1}}), std::invalid_argument);
   EXPECT_THROW(b.add_mesh("m", make_box({0, 0, 0}, {1, 1, 1}), 3), std::invalid_argument);
   EXPECT_THROW(b.add_mesh("m", Geometry{}, -1), std::invalid_argument);
-  EXPECT_THROW(b.add_light({.type = LightType::kSpot, .inner_cone_angle = 0.6f, .outer_cone_angle = 0.5f}),
-               std::invalid_argument);
+  EXPECT_THROW(
+      b.add_light({.type = LightType::kSpot, .inner_cone_angle = 0.6f, .outer_cone_angle = 0.5f}),
+      std::invalid_argument);
   EXPECT_THROW(b.add_light({.intensity = -1.0f}), std::invalid_argument);
   EXPECT_THROW(b.add_node({.name = "n", .mesh = 0}), std::invalid_argument);
   const int a = b.add_node({.name = "a"});

@@ -56,7 +56,8 @@ TEST(AtlasPacker, ThreeChannelPatchesComeFirstAndTakeRgb) {
   EXPECT_EQ(a.placements[3].channel, 0);
   EXPECT_EQ(a.placements[3].x, 1);  // placed first: the top-left corner
   EXPECT_EQ(a.placements[3].y, 1);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.placements[size_t(i)].channel, 0);  // channel 0 still has room
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(a.placements[size_t(i)].channel, 0);  // channel 0 still has room
 }
 
 TEST(AtlasPacker, SortsBySizeDescending) {
@@ -74,7 +75,8 @@ TEST(AtlasPacker, RandomItemsNeverOverlapAndStayInside) {
     return int((s >> 33) % uint64_t(n));
   };
   std::vector<PackItem> items;
-  for (int i = 0; i < 300; ++i) items.push_back(PackItem{1 + next(40), 1 + next(40), next(3) == 0 ? 3 : 1});
+  for (int i = 0; i < 300; ++i)
+    items.push_back(PackItem{1 + next(40), 1 + next(40), next(3) == 0 ? 3 : 1});
   const AtlasLayout a = pack_atlases(items, 128);
   std::vector<std::vector<uint8_t>> used;  // per atlas, per texel: channel bits
   for (const AtlasSize& sz : a.atlases) used.emplace_back(size_t(sz.width) * sz.height, 0);

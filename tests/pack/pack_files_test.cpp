@@ -120,10 +120,12 @@ void exercise(const PackView& v) {
   r.rebuild(st);
   volatile float sink = r.rgb()[0];
   (void)sink;
-  for (uint32_t i = 0; i < v.light_count(); ++i) (void)v.find_light(v.light_name(i).data, v.light_name(i).length);
+  for (uint32_t i = 0; i < v.light_count(); ++i)
+    (void)v.find_light(v.light_name(i).data, v.light_name(i).length);
   for (uint32_t i = 0; i < v.mesh_count(); ++i) {
     volatile uint32_t s = 0;
-    for (uint32_t k = 0; k < v.mesh(i).index_count; ++k) s = s + v.mesh_vertices(i)[v.mesh_indices(i)[k]].source_vertex;
+    for (uint32_t k = 0; k < v.mesh(i).index_count; ++k)
+      s = s + v.mesh_vertices(i)[v.mesh_indices(i)[k]].source_vertex;
     (void)v.mesh_name(i);
   }
 }
@@ -138,7 +140,8 @@ TEST(PackFiles, FlippedBytesAreRefusedOrSafe) {
   uint64_t table_end = 0;
   const pack::SectionEntry* entries = reinterpret_cast<const pack::SectionEntry*>(base.data() + 64);
   for (uint32_t i = 0; i < original.header().section_count; ++i) {
-    if (entries[i].type != pack::kSectionAtlasData) table_end = std::max(table_end, entries[i].offset + entries[i].length);
+    if (entries[i].type != pack::kSectionAtlasData)
+      table_end = std::max(table_end, entries[i].offset + entries[i].length);
   }
   int refused_raw = 0, refused_fixed = 0, accepted = 0;
   for (uint64_t i = 0; i < table_end; ++i) {
@@ -146,7 +149,10 @@ TEST(PackFiles, FlippedBytesAreRefusedOrSafe) {
       Aligned a(b, b.size());
       a.data()[i] ^= mask;
       PackView v;
-      if (PackView::open(a.data(), b.size(), &v, nullptr) != Status::kOk) ++refused_raw; else exercise(v);
+      if (PackView::open(a.data(), b.size(), &v, nullptr) != Status::kOk)
+        ++refused_raw;
+      else
+        exercise(v);
       fix_checksum(a.data(), b.size());
       Error e;
       if (PackView::open(a.data(), b.size(), &v, &e) != Status::kOk) {

@@ -32,7 +32,8 @@ struct Built {
   Report report;
 };
 
-void build(Built& b, const test::SyntheticOptions& o, EncodingPolicy policy = EncodingPolicy::kAuto) {
+void build(Built& b, const test::SyntheticOptions& o,
+           EncodingPolicy policy = EncodingPolicy::kAuto) {
   b.s = test::make_synthetic(o);
   PackOptions po;
   po.encoding = policy;
@@ -56,9 +57,11 @@ void add_patch_bounds(const PackView& v, int32_t group, std::vector<double>& bou
   for (uint32_t i = g.first_patch; i < g.first_patch + g.patch_count; ++i) {
     const pack::PatchRecord& p = v.patch(i);
     const double e = double(p.scale) *
-                     (p.encoding == pack::kEncodingSquare ? kSquareErrorBound : kLinearErrorBound) * 1.0001;
+                     (p.encoding == pack::kEncodingSquare ? kSquareErrorBound : kLinearErrorBound) *
+                     1.0001;
     for (int y = p.dest_y; y < p.dest_y + p.height; ++y) {
-      for (int x = p.dest_x; x < p.dest_x + p.width; ++x) bound[size_t(y) * v.lightmap_width() + x] += e;
+      for (int x = p.dest_x; x < p.dest_x + p.width; ++x)
+        bound[size_t(y) * v.lightmap_width() + x] += e;
     }
   }
 }
@@ -71,7 +74,8 @@ void set_all(SceneState& st, const PackView& v, bool lights_on, bool objects_vis
 // Compares the recomposed map against `expected(x, y, c)` within bound + slack; returns the
 // largest error seen.
 template <typename F>
-double expect_within(const CpuRecomposer& r, const std::vector<double>& bound, F expected, const char* what) {
+double expect_within(const CpuRecomposer& r, const std::vector<double>& bound, F expected,
+                     const char* what) {
   double worst = 0.0;
   int failures = 0;
   for (uint32_t y = 0; y < r.height(); ++y) {
@@ -83,8 +87,8 @@ double expect_within(const CpuRecomposer& r, const std::vector<double>& bound, F
         worst = std::max(worst, err);
         const double b = bound[size_t(y) * r.width() + x] + 1e-6 * std::fabs(want) + 1e-9;
         if (err > b && failures++ < 5) {
-          ADD_FAILURE() << what << ": texel (" << x << "," << y << ") channel " << c << ": got " << got
-                        << ", want " << want << ", bound " << b;
+          ADD_FAILURE() << what << ": texel (" << x << "," << y << ") channel " << c << ": got "
+                        << got << ", want " << want << ", bound " << b;
         }
       }
     }
@@ -110,7 +114,8 @@ TEST_P(RoundTrip, RecomposedMapsMatchTheFloatMapsWithinTheQuantizationBound) {
   r.rebuild(st);
   std::vector<double> base_bound(n, 0.5 * maps.output_step);
   add_patch_bounds(v, v.base_group(), base_bound);
-  const double base_err = expect_within(r, base_bound, [&](int x, int y, int c) { return maps.base.at(x, y, c); }, "base");
+  const double base_err = expect_within(
+      r, base_bound, [&](int x, int y, int c) { return maps.base.at(x, y, c); }, "base");
   EXPECT_GT(base_err, 0.0);  // 8 bits cannot be exact on a gradient: the test measures something
 
   for (uint32_t l = 0; l < v.light_count(); ++l) {
@@ -127,9 +132,12 @@ TEST_P(RoundTrip, RecomposedMapsMatchTheFloatMapsWithinTheQuantizationBound) {
     r.rebuild(st);
     std::vector<double> with_base = cb;
     for (size_t i = 0; i < n; ++i) with_base[i] += base_bound[i];
-    expect_within(r, with_base, [&](int x, int y, int c) {
-      return double(maps.base.at(x, y, c)) + cm.at(x, y, cm.channels == 3 ? c : 0);
-    }, "contribution");
+    expect_within(
+        r, with_base,
+        [&](int x, int y, int c) {
+          return double(maps.base.at(x, y, c)) + cm.at(x, y, cm.channels == 3 ? c : 0);
+        },
+        "contribution");
     for (uint32_t o = 0; o < v.object_count(); ++o) {
       const ShadowMap* sm = nullptr;
       for (const ShadowMap& s : maps.shadows) {
@@ -148,17 +156,21 @@ TEST_P(RoundTrip, RecomposedMapsMatchTheFloatMapsWithinTheQuantizationBound) {
       add_patch_bounds(v, v.shadow_group(l, o), sb);
       st.set_object_visible(o, true);
       r.rebuild(st);
-      expect_within(r, sb, [&](int x, int y, int c) {
-        const int k = cm.channels == 3 ? c : 0;
-        return double(maps.base.at(x, y, c)) + cm.at(x, y, k) - sm->map.at(x, y, k);
-      }, "contribution minus shadow");
+      expect_within(
+          r, sb,
+          [&](int x, int y, int c) {
+            const int k = cm.channels == 3 ? c : 0;
+            return double(maps.base.at(x, y, c)) + cm.at(x, y, k) - sm->map.at(x, y, k);
+          },
+          "contribution minus shadow");
       st.set_object_visible(o, false);
     }
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(Encodings, RoundTrip,
-                         ::testing::Values(EncodingPolicy::kAuto, EncodingPolicy::kLinear, EncodingPolicy::kSquare));
+                         ::testing::Values(EncodingPolicy::kAuto, EncodingPolicy::kLinear,
+                                           EncodingPolicy::kSquare));
 
 TEST(PackBuilder, ReportsMeasuredErrorsAndTheChosenEncodingIsNoWorse) {
   Built b;
@@ -242,7 +254,9 @@ TEST(PackBuilder, GuttersReplicateEdgeTexels) {
     ASSERT_LE(p.atlas_x + p.width + 1u, a.width);
     ASSERT_LE(p.atlas_y + p.height + 1u, a.height);
     const uint8_t* px = v.atlas_pixels(p.atlas);
-    auto at = [&](int x, int y, int c) { return px[(size_t(y) * a.width + x) * 4 + p.channel + c]; };
+    auto at = [&](int x, int y, int c) {
+      return px[(size_t(y) * a.width + x) * 4 + p.channel + c];
+    };
     for (int y = -1; y <= p.height; ++y) {
       for (int x = -1; x <= p.width; ++x) {
         const int sx = std::clamp(x, 0, p.width - 1), sy = std::clamp(y, 0, p.height - 1);
@@ -293,7 +307,8 @@ TEST(PackBuilder, LargePatchesAreTiledToTheMaximumAtlasSize) {
   r.rebuild(st);
   std::vector<double> bound(size_t(80) * 80, 0.5 * s.maps.output_step);
   add_patch_bounds(v, v.base_group(), bound);
-  expect_within(r, bound, [&](int x, int y, int c) { return s.maps.base.at(x, y, c); }, "tiled base");
+  expect_within(
+      r, bound, [&](int x, int y, int c) { return s.maps.base.at(x, y, c); }, "tiled base");
 }
 
 }  // namespace

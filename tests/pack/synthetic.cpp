@@ -32,8 +32,10 @@ Synthetic make_synthetic(const SyntheticOptions& o) {
   // Four regions in a 2x2 grid with a one-texel empty border; the bottom-right one stays black in
   // the base map.
   const int hw = w / 2, hh = h / 2;
-  const Rect rects[4] = {{1, 1, hw - 2, hh - 2}, {hw + 1, 1, w - hw - 2, hh - 2},
-                         {1, hh + 1, hw - 2, h - hh - 2}, {hw + 1, hh + 1, w - hw - 2, h - hh - 2}};
+  const Rect rects[4] = {{1, 1, hw - 2, hh - 2},
+                         {hw + 1, 1, w - hw - 2, hh - 2},
+                         {1, hh + 1, hw - 2, h - hh - 2},
+                         {hw + 1, hh + 1, w - hw - 2, h - hh - 2}};
   for (int r = 0; r < 4; ++r) {
     Region region;
     region.name = "region_" + std::to_string(r);
@@ -137,8 +139,10 @@ Synthetic make_synthetic(const SyntheticOptions& o) {
           const float d = std::hypot(x + 0.5f - cx, y + 0.5f - cy);
           for (int k = 0; k < c.channels; ++k) {
             const float v = c.at(x, y, k);
-            if (d < r0) sm.map.at(x, y, k) = 0.9f * v;
-            else if (d < r1) sm.map.at(x, y, k) = -0.1f * v;  // bounce off the object
+            if (d < r0)
+              sm.map.at(x, y, k) = 0.9f * v;
+            else if (d < r1)
+              sm.map.at(x, y, k) = -0.1f * v;  // bounce off the object
           }
         }
       }

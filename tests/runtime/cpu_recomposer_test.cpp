@@ -26,7 +26,8 @@ testing::RefState ref_of(const SceneState& s, const PackView& pack) {
     s.light_factor(l, f);
     r.factor.insert(r.factor.end(), f, f + 3);
   }
-  for (uint32_t o = 0; o < pack.object_count(); ++o) r.visible.push_back(s.object_visible(o) ? 1 : 0);
+  for (uint32_t o = 0; o < pack.object_count(); ++o)
+    r.visible.push_back(s.object_visible(o) ? 1 : 0);
   return r;
 }
 

@@ -105,7 +105,8 @@ class CpuMapSink final : public DrawSink {
         const pack::PatchRecord& pr = pack_.patch(p);
         for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
           for (uint32_t x = pr.dest_x; x < uint32_t(pr.dest_x + pr.width); ++x) {
-            for (int c = 0; c < 3; ++c) m[(size_t(y) * w + x) * 3 + c] = round_half(m[(size_t(y) * w + x) * 3 + c]);
+            for (int c = 0; c < 3; ++c)
+              m[(size_t(y) * w + x) * 3 + c] = round_half(m[(size_t(y) * w + x) * 3 + c]);
           }
         }
       }
@@ -138,7 +139,8 @@ inline RefState wanted_state(const Planner& p, const PackView& pack) {
   for (uint32_t l = 0; l < pack.light_count(); ++l) {
     float c[3];
     p.light_color(l, c);
-    for (int k = 0; k < 3; ++k) s.factor.push_back(p.light_on(l) ? c[k] * p.light_intensity(l) : 0.0f);
+    for (int k = 0; k < 3; ++k)
+      s.factor.push_back(p.light_on(l) ? c[k] * p.light_intensity(l) : 0.0f);
   }
   for (uint32_t o = 0; o < pack.object_count(); ++o) s.visible.push_back(p.object_visible(o));
   return s;

@@ -25,8 +25,7 @@ double max_abs_diff(const std::vector<float>& a, const std::vector<double>& b) {
 }
 
 struct Fixture {
-  explicit Fixture(const SyntheticOptions& o, bool half = false)
-      : bytes(make_synthetic_pack(o)) {
+  explicit Fixture(const SyntheticOptions& o, bool half = false) : bytes(make_synthetic_pack(o)) {
     Error error;
     EXPECT_TRUE(bytes.open(&pack, &error)) << error.message;
     EXPECT_EQ(planner.init(pack, PlannerLimits(), &error), Status::kOk) << error.message;
@@ -89,12 +88,14 @@ TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
       if (s.oversize_steps == 0) {
         ASSERT_LE(s.texels, budget) << "frame " << frame;
       } else {
-        ASSERT_LE(s.draws, 1u) << "frame " << frame << " budget " << budget << " texels " << s.texels;  // an oversize step runs alone
+        ASSERT_LE(s.draws, 1u) << "frame " << frame << " budget " << budget << " texels "
+                               << s.texels;  // an oversize step runs alone
       }
       if (f.planner.map_ready()) {
         // The sampled map is exactly the presented state: never half of a change.
         const auto ref = reference_map(f.pack, testing::shown_state(f.planner, f.pack));
-        ASSERT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3) << "seed " << seed << " frame " << frame;
+        ASSERT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3)
+            << "seed " << seed << " frame " << frame;
       }
     }
   }

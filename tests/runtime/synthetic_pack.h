@@ -70,10 +70,12 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     groups.push_back(GroupRecord{kind, light, a, b, 0, 0});
   };
   add_group(kGroupBase, kNone16, kNone16, kNone16);
-  for (uint32_t l = 0; l < o.lights; ++l) add_group(kGroupContribution, uint16_t(l), kNone16, kNone16);
+  for (uint32_t l = 0; l < o.lights; ++l)
+    add_group(kGroupContribution, uint16_t(l), kNone16, kNone16);
   for (uint32_t l = 0; l < o.lights; ++l) {
     for (uint32_t a = 0; a < o.objects; ++a) {
-      if (uniform(0, 1) < o.shadow_probability) add_group(kGroupShadow, uint16_t(l), uint16_t(a), kNone16);
+      if (uniform(0, 1) < o.shadow_probability)
+        add_group(kGroupShadow, uint16_t(l), uint16_t(a), kNone16);
     }
   }
   for (uint32_t l = 0; l < o.lights; ++l) {
@@ -86,7 +88,8 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     }
   }
   for (uint32_t a = 0; a < o.objects; ++a) {
-    if (uniform(0, 1) < o.static_shadow_probability) add_group(kGroupStaticShadow, kNone16, uint16_t(a), kNone16);
+    if (uniform(0, 1) < o.static_shadow_probability)
+      add_group(kGroupStaticShadow, kNone16, uint16_t(a), kNone16);
   }
   // Patches, shelf-packed into as many atlases as needed (random bytes in all channels).
   std::vector<PatchRecord> patches;
@@ -126,7 +129,9 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
 
   // Layout: header, index, then 256-aligned sections.
   const uint32_t section_count = 7;
-  auto align = [](uint64_t v) { return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment; };
+  auto align = [](uint64_t v) {
+    return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
+  };
   uint64_t cursor = align(sizeof(Header) + section_count * sizeof(SectionEntry));
   std::vector<SectionEntry> index;
   auto place = [&](uint32_t type, uint64_t length) {
@@ -151,13 +156,16 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   out.size = cursor;
   out.storage.assign((cursor + 7) / 8, 0);
   uint8_t* b = reinterpret_cast<uint8_t*>(out.storage.data());
-  auto put = [&](uint64_t at, const void* src, size_t n) { if (n) std::memcpy(b + at, src, n); };
+  auto put = [&](uint64_t at, const void* src, size_t n) {
+    if (n) std::memcpy(b + at, src, n);
+  };
   put(lights_at, lights.data(), lights.size() * sizeof(LightRecord));
   put(objects_at, objects.data(), objects.size() * sizeof(ObjectRecord));
   put(groups_at, groups.data(), groups.size() * sizeof(GroupRecord));
   put(patches_at, patches.data(), patches.size() * sizeof(PatchRecord));
   put(atlases_at, atlas_records.data(), atlas_records.size() * sizeof(AtlasRecord));
-  for (size_t a = 0; a < atlases.size(); ++a) put(data_at + a * atlas_bytes, atlases[a].data(), atlases[a].size());
+  for (size_t a = 0; a < atlases.size(); ++a)
+    put(data_at + a * atlas_bytes, atlases[a].data(), atlases[a].size());
   put(strings_at, strings.data(), strings.size());
   put(sizeof(Header), index.data(), index.size() * sizeof(SectionEntry));
 

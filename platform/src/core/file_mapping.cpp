@@ -1,16 +1,18 @@
 #include "lightpatch/platform/file_mapping.h"
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 
 namespace lightpatch::platform {
 
-FileMapping::~FileMapping() { close(); }
+FileMapping::~FileMapping() {
+  close();
+}
 
 FileMapping::FileMapping(FileMapping&& other) noexcept : data_(other.data_), size_(other.size_) {
   other.data_ = nullptr;

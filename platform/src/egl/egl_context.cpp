@@ -42,7 +42,9 @@ const EGLint kContextAttribs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINO
 
 }  // namespace
 
-EglContext::~EglContext() { destroy(); }
+EglContext::~EglContext() {
+  destroy();
+}
 
 bool EglContext::create_headless(char* message, unsigned message_size) {
   destroy();
@@ -57,7 +59,8 @@ bool EglContext::create_headless(char* message, unsigned message_size) {
     }
   }
   EGLint major = 0, minor = 0;
-  if (display != EGL_NO_DISPLAY && !eglInitialize(display, &major, &minor)) display = EGL_NO_DISPLAY;
+  if (display != EGL_NO_DISPLAY && !eglInitialize(display, &major, &minor))
+    display = EGL_NO_DISPLAY;
   if (display == EGL_NO_DISPLAY) {
     display = eglGetDisplay(EGL_DEFAULT_DISPLAY);
     if (display == EGL_NO_DISPLAY || !eglInitialize(display, &major, &minor)) {
@@ -66,7 +69,8 @@ bool EglContext::create_headless(char* message, unsigned message_size) {
     }
   }
   display_ = display;
-  surfaceless = has_extension(eglQueryString(display, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context");
+  surfaceless =
+      has_extension(eglQueryString(display, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context");
   if (!eglBindAPI(EGL_OPENGL_ES_API)) {
     destroy();
     return fail(message, message_size, "EGL: OpenGL ES API not available");
@@ -136,9 +140,19 @@ bool EglContext::create_window(int width, int height, const char* title, char* m
   }
   display_ = display;
   eglBindAPI(EGL_OPENGL_ES_API);
-  const EGLint config_attribs[] = {EGL_SURFACE_TYPE, EGL_WINDOW_BIT, EGL_RENDERABLE_TYPE,
-                                   EGL_OPENGL_ES3_BIT, EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8,
-                                   EGL_BLUE_SIZE, 8, EGL_DEPTH_SIZE, 24, EGL_NONE};
+  const EGLint config_attribs[] = {EGL_SURFACE_TYPE,
+                                   EGL_WINDOW_BIT,
+                                   EGL_RENDERABLE_TYPE,
+                                   EGL_OPENGL_ES3_BIT,
+                                   EGL_RED_SIZE,
+                                   8,
+                                   EGL_GREEN_SIZE,
+                                   8,
+                                   EGL_BLUE_SIZE,
+                                   8,
+                                   EGL_DEPTH_SIZE,
+                                   24,
+                                   EGL_NONE};
   EGLConfig config = nullptr;
   EGLint count = 0;
   if (!eglChooseConfig(display, config_attribs, &config, 1, &count) || count < 1) {
@@ -222,13 +236,25 @@ bool EglContext::poll_event(InputEvent* event) {
         const KeySym sym = XLookupKeysym(&e.xkey, 0);
         uint32_t key = 0;
         switch (sym) {
-          case XK_Escape: key = kKeyEscape; break;
-          case XK_Left: key = kKeyLeft; break;
-          case XK_Right: key = kKeyRight; break;
-          case XK_Up: key = kKeyUp; break;
-          case XK_Down: key = kKeyDown; break;
+          case XK_Escape:
+            key = kKeyEscape;
+            break;
+          case XK_Left:
+            key = kKeyLeft;
+            break;
+          case XK_Right:
+            key = kKeyRight;
+            break;
+          case XK_Up:
+            key = kKeyUp;
+            break;
+          case XK_Down:
+            key = kKeyDown;
+            break;
           case XK_Shift_L:
-          case XK_Shift_R: key = kKeyShift; break;
+          case XK_Shift_R:
+            key = kKeyShift;
+            break;
           default:
             if (sym >= 0x20 && sym < 0x7f) key = static_cast<uint32_t>(sym);
         }

@@ -121,9 +121,9 @@ struct ObjectRecord {
 static_assert(sizeof(ObjectRecord) == 16);
 
 enum GroupKind : uint16_t {
-  kGroupBase = 0,          // light = object_a = object_b = kNone16; added once
-  kGroupContribution = 1,  // light; added with factor f_l = on * color * intensity
-  kGroupShadow = 2,        // light, object_a; subtracted with f_l while object_a is visible
+  kGroupBase = 0,            // light = object_a = object_b = kNone16; added once
+  kGroupContribution = 1,    // light; added with factor f_l = on * color * intensity
+  kGroupShadow = 2,          // light, object_a; subtracted with f_l while object_a is visible
   kGroupPairCorrection = 3,  // light, object_a < object_b; added with f_l while both visible
   // What object_a changes in the static lights' light (B with the object present minus B): its
   // shadow and blocked bounce, the bounce it adds. light = object_b = kNone16; subtracted with
@@ -155,8 +155,8 @@ enum PatchFlags : uint8_t {
   kFlagNegative = 1u << 0,  // decoded values are subtracted from (added with sign -1 to) the map
 };
 
-// One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of the light map.
-// Rectangles are in texels with the origin at the top-left of the image (row 0 is the first
+// One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of the light
+// map. Rectangles are in texels with the origin at the top-left of the image (row 0 is the first
 // row of the atlas data, and glTF v = 0 in the light map).
 struct PatchRecord {
   uint16_t atlas_x, atlas_y;  // top-left texel in the atlas
@@ -164,12 +164,12 @@ struct PatchRecord {
   uint16_t dest_x, dest_y;    // top-left texel in the light map
   uint8_t atlas;              // atlas index
   uint8_t channel;            // first atlas channel (0=R .. 3=A)
-  uint8_t channel_count;      // 1 (grey: same value in R,G,B of the map) or 3 (RGB from channel..+2)
-  uint8_t encoding;           // PatchEncoding
-  float scale;                // finite, > 0
-  uint8_t flags;              // PatchFlags
-  uint8_t reserved;           // 0
-  uint16_t group;             // index of the owning GroupRecord (redundant, validated)
+  uint8_t channel_count;  // 1 (grey: same value in R,G,B of the map) or 3 (RGB from channel..+2)
+  uint8_t encoding;       // PatchEncoding
+  float scale;            // finite, > 0
+  uint8_t flags;          // PatchFlags
+  uint8_t reserved;       // 0
+  uint16_t group;         // index of the owning GroupRecord (redundant, validated)
 };
 static_assert(sizeof(PatchRecord) == 24);
 static_assert(offsetof(PatchRecord, dest_x) == 8);
@@ -190,15 +190,15 @@ static_assert(sizeof(AtlasRecord) == 16);
 // layout the cooker chose (unwrapped or verbatim TEXCOORD_1). Vertices refer to the source
 // primitive's vertices; seams duplicate them.
 struct MeshRecord {
-  uint32_t name_offset;     // glTF node name, into kStrings
-  uint32_t name_length;     // bytes
-  uint32_t node_index;      // glTF node index
-  uint32_t primitive;       // primitive index within the node's mesh
-  uint64_t vertex_offset;   // from file start, inside kMeshData: MeshVertex[vertex_count]
-  uint64_t index_offset;    // from file start, inside kMeshData: uint32_t[index_count]
+  uint32_t name_offset;    // glTF node name, into kStrings
+  uint32_t name_length;    // bytes
+  uint32_t node_index;     // glTF node index
+  uint32_t primitive;      // primitive index within the node's mesh
+  uint64_t vertex_offset;  // from file start, inside kMeshData: MeshVertex[vertex_count]
+  uint64_t index_offset;   // from file start, inside kMeshData: uint32_t[index_count]
   uint32_t vertex_count;
-  uint32_t index_count;     // multiple of 3; every index < vertex_count
-  uint16_t object;          // semi-dynamic object index or kNone16
+  uint32_t index_count;  // multiple of 3; every index < vertex_count
+  uint16_t object;       // semi-dynamic object index or kNone16
   uint16_t reserved0;
   uint32_t reserved1;
 };

@@ -26,9 +26,10 @@
 //    bound and starts a rebuild when it exceeds drift_tolerance_ulps * 2^-11 * M.
 //
 // Budget rule: update(budget) never writes more than `budget` texels, except that a single step
-// that alone exceeds the whole budget (one patch larger than the budget, or the clear of a light map
-// larger than the budget) runs alone in a frame of its own; such frames are counted in
-// FrameStats::oversize_steps. Memory: everything is allocated in init(); update() allocates nothing.
+// that alone exceeds the whole budget (one patch larger than the budget, or the clear of a light
+// map larger than the budget) runs alone in a frame of its own; such frames are counted in
+// FrameStats::oversize_steps. Memory: everything is allocated in init(); update() allocates
+// nothing.
 #pragma once
 
 #include <cstdint>
@@ -61,18 +62,18 @@ struct PlannerLimits {
 };
 
 struct FrameStats {
-  uint64_t frame = 0;              // update() calls so far
-  uint64_t texels = 0;             // texels written this frame (clears included)
-  uint32_t draws = 0;              // draw calls this frame
-  uint32_t pending_changes = 0;    // lights/objects whose wanted state is not yet presented
+  uint64_t frame = 0;                  // update() calls so far
+  uint64_t texels = 0;                 // texels written this frame (clears included)
+  uint32_t draws = 0;                  // draw calls this frame
+  uint32_t pending_changes = 0;        // lights/objects whose wanted state is not yet presented
   uint32_t oldest_pending_frames = 0;  // age in frames of the oldest pending change
-  uint32_t completed_changes = 0;  // changes that became visible this frame
+  uint32_t completed_changes = 0;      // changes that became visible this frame
   uint32_t max_latency_frames = 0;     // largest latency among them (1 = visible in the next frame)
-  bool rebuild_active = false;     // a rebuild is in progress (after this frame)
-  bool presented = false;          // a rebuild was presented this frame
-  uint32_t oversize_steps = 0;     // 1 when this frame ran a single step larger than the budget
+  bool rebuild_active = false;         // a rebuild is in progress (after this frame)
+  bool presented = false;              // a rebuild was presented this frame
+  uint32_t oversize_steps = 0;         // 1 when this frame ran a single step larger than the budget
   uint64_t rebuild_remaining_texels = 0;  // cost left in the running rebuild
-  float error_bound = 0.0f;        // accumulated incremental error bound (irradiance units)
+  float error_bound = 0.0f;               // accumulated incremental error bound (irradiance units)
 };
 
 class Planner {
@@ -113,7 +114,7 @@ class Planner {
   uint64_t group_texels(uint32_t group) const { return group_texels_[group]; }
   uint64_t clear_texels() const { return clear_texels_; }
   uint64_t rebuild_texels() const;  // the full rebuild of the wanted state, clear included
-  uint64_t light_change_texels(uint32_t light) const;   // for the presented visibility
+  uint64_t light_change_texels(uint32_t light) const;    // for the presented visibility
   uint64_t object_change_texels(uint32_t object) const;  // for the presented factors
 
  private:
@@ -135,16 +136,16 @@ class Planner {
   PlannerLimits limits_;
   uint32_t light_count_ = 0, object_count_ = 0, group_count_ = 0;
   uint64_t clear_texels_ = 0;
-  uint64_t* group_texels_ = nullptr;     // [group]
-  uint64_t* patch_prefix_ = nullptr;     // [patch + 1] prefix sums of patch areas
-  float* group_max_ = nullptr;           // [group] max |decoded value|
+  uint64_t* group_texels_ = nullptr;  // [group]
+  uint64_t* patch_prefix_ = nullptr;  // [patch + 1] prefix sums of patch areas
+  float* group_max_ = nullptr;        // [group] max |decoded value|
   float base_max_ = 0.0f;
-  float* light_max_ = nullptr;           // [light] sum of group_max_ of its groups
-  int32_t* contribution_ = nullptr;      // [light] group or -1
-  uint32_t* light_first_ = nullptr;      // [light + 1] range in light_groups_
-  uint32_t* light_groups_ = nullptr;     // shadow/pair groups of each light
-  uint32_t* object_first_ = nullptr;     // [object + 1] range in object_groups_
-  uint32_t* object_groups_ = nullptr;    // shadow/pair groups naming each object
+  float* light_max_ = nullptr;         // [light] sum of group_max_ of its groups
+  int32_t* contribution_ = nullptr;    // [light] group or -1
+  uint32_t* light_first_ = nullptr;    // [light + 1] range in light_groups_
+  uint32_t* light_groups_ = nullptr;   // shadow/pair groups of each light
+  uint32_t* object_first_ = nullptr;   // [object + 1] range in object_groups_
+  uint32_t* object_groups_ = nullptr;  // shadow/pair groups naming each object
 
   // Wanted state.
   uint8_t* on_ = nullptr;
@@ -163,8 +164,8 @@ class Planner {
   bool ready_ = false;
   bool rebuilding_ = false;
   bool rebuild_cleared_ = false;
-  uint32_t rebuild_group_ = 0;   // next group to draw
-  uint32_t rebuild_patch_ = 0;   // next patch within it (patch-range splitting)
+  uint32_t rebuild_group_ = 0;  // next group to draw
+  uint32_t rebuild_patch_ = 0;  // next patch within it (patch-range splitting)
   uint64_t rebuild_left_ = 0;
   float error_bound_ = 0.0f;
   uint64_t frame_ = 0;

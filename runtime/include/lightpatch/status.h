@@ -7,9 +7,9 @@ namespace lightpatch {
 
 enum class Status : int32_t {
   kOk = 0,
-  kInvalidArgument,   // a caller's argument is out of range or null
-  kTruncated,         // the data ends before a structure it declares
-  kBadMagic,          // not a lightpatch pack
+  kInvalidArgument,  // a caller's argument is out of range or null
+  kTruncated,        // the data ends before a structure it declares
+  kBadMagic,         // not a lightpatch pack
   kUnsupportedVersion,
   kCorrupt,           // a field, offset, index or rectangle is out of range or inconsistent
   kChecksumMismatch,  // table checksum does not match

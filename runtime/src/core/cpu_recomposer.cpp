@@ -21,7 +21,8 @@ CpuRecomposer::~CpuRecomposer() {
 
 Status CpuRecomposer::init(const PackView& pack, Error* error) {
   if (!pack.valid()) return set_error(error, Status::kInvalidArgument, "recomposer: pack not open");
-  if (accum_ != nullptr) return set_error(error, Status::kInvalidArgument, "recomposer: already initialised");
+  if (accum_ != nullptr)
+    return set_error(error, Status::kInvalidArgument, "recomposer: already initialised");
   pack_ = pack;
   width_ = pack.lightmap_width();
   height_ = pack.lightmap_height();
@@ -56,8 +57,12 @@ Status CpuRecomposer::init(const PackView& pack, Error* error) {
   for (uint32_t g = 0; g < pack.group_count(); ++g) {
     const GroupRecord& r = pack.group(g);
     switch (r.kind) {
-      case kGroupBase: base_ = static_cast<int32_t>(g); break;
-      case kGroupContribution: contribution_[r.light] = static_cast<int32_t>(g); break;
+      case kGroupBase:
+        base_ = static_cast<int32_t>(g);
+        break;
+      case kGroupContribution:
+        contribution_[r.light] = static_cast<int32_t>(g);
+        break;
       case kGroupShadow:
         if (shadow_end_[r.light] == 0) shadow_begin_[r.light] = g;
         shadow_end_[r.light] = g + 1;
@@ -70,7 +75,8 @@ Status CpuRecomposer::init(const PackView& pack, Error* error) {
         if (static_end_ == 0) static_begin_ = g;
         static_end_ = g + 1;
         break;
-      default: break;
+      default:
+        break;
     }
   }
   has_last_ = false;
@@ -88,7 +94,8 @@ void CpuRecomposer::draw_group(uint32_t group, const double factor[3]) {
     float table[256];
     for (int q = 0; q < 256; ++q) table[q] = patch_decode(p, static_cast<uint8_t>(q));
     for (uint32_t y = 0; y < p.height; ++y) {
-      const uint8_t* src = pixels + ((uint64_t(p.atlas_y) + y) * a.width + p.atlas_x) * 4 + p.channel;
+      const uint8_t* src =
+          pixels + ((uint64_t(p.atlas_y) + y) * a.width + p.atlas_x) * 4 + p.channel;
       double* dst = accum_ + ((uint64_t(p.dest_y) + y) * width_ + p.dest_x) * 3;
       for (uint32_t x = 0; x < p.width; ++x, src += 4, dst += 3) {
         if (p.channel_count == 1) {
@@ -197,12 +204,14 @@ Status CpuRecomposer::apply(const SceneState& state) {
     double f_old[3], f_new[3];
     factor_of(last_, l, f_old);
     factor_of(state, l, f_new);
-    const bool factor_changed = f_old[0] != f_new[0] || f_old[1] != f_new[1] || f_old[2] != f_new[2];
+    const bool factor_changed =
+        f_old[0] != f_new[0] || f_old[1] != f_new[1] || f_old[2] != f_new[2];
     const bool visibility_changed = light_touched_by_objects(l, state);
     const bool lit = f_old[0] != 0.0 || f_old[1] != 0.0 || f_old[2] != 0.0 || f_new[0] != 0.0 ||
                      f_new[1] != 0.0 || f_new[2] != 0.0;
     // 1: factor only (Alg. 8); 2: the light's shadowed contribution itself changed (Alg. 7).
-    affected_[l] = factor_changed ? (visibility_changed ? 2 : 1) : (visibility_changed && lit ? 2 : 0);
+    affected_[l] =
+        factor_changed ? (visibility_changed ? 2 : 1) : (visibility_changed && lit ? 2 : 0);
     if (affected_[l] != 0) ++m;
   }
   if (!(2 * m < n)) {

@@ -25,26 +25,40 @@ struct Section {
 
 const char* section_name(uint32_t type) {
   switch (type) {
-    case kSectionLights: return "lights";
-    case kSectionObjects: return "objects";
-    case kSectionGroups: return "groups";
-    case kSectionPatches: return "patches";
-    case kSectionAtlases: return "atlases";
-    case kSectionAtlasData: return "atlas data";
-    case kSectionStrings: return "strings";
-    case kSectionMeshes: return "meshes";
-    case kSectionMeshData: return "mesh data";
+    case kSectionLights:
+      return "lights";
+    case kSectionObjects:
+      return "objects";
+    case kSectionGroups:
+      return "groups";
+    case kSectionPatches:
+      return "patches";
+    case kSectionAtlases:
+      return "atlases";
+    case kSectionAtlasData:
+      return "atlas data";
+    case kSectionStrings:
+      return "strings";
+    case kSectionMeshes:
+      return "meshes";
+    case kSectionMeshData:
+      return "mesh data";
   }
   return "unknown";
 }
 
 const char* group_kind_name(uint32_t kind) {
   switch (kind) {
-    case kGroupBase: return "base";
-    case kGroupContribution: return "contribution";
-    case kGroupShadow: return "shadow";
-    case kGroupPairCorrection: return "pair correction";
-    case kGroupStaticShadow: return "static shadow";
+    case kGroupBase:
+      return "base";
+    case kGroupContribution:
+      return "contribution";
+    case kGroupShadow:
+      return "shadow";
+    case kGroupPairCorrection:
+      return "pair correction";
+    case kGroupStaticShadow:
+      return "static shadow";
   }
   return "unknown";
 }
@@ -56,9 +70,13 @@ bool range_inside(uint64_t offset, uint64_t length, uint64_t begin, uint64_t siz
   return rel <= size && length <= size - rel;
 }
 
-bool is_pow2(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
+bool is_pow2(uint32_t v) {
+  return v != 0 && (v & (v - 1)) == 0;
+}
 
-bool finite_non_negative(float v) { return std::isfinite(v) && v >= 0.0f; }
+bool finite_non_negative(float v) {
+  return std::isfinite(v) && v >= 0.0f;
+}
 
 // Lexicographic key of a group for the sort/uniqueness check.
 uint64_t group_key(const GroupRecord& g) {
@@ -146,7 +164,8 @@ Status Validator::run(Parsed* out) {
                 static_cast<unsigned long long>(h.file_size),
                 static_cast<unsigned long long>(size_));
   }
-  if (h.flags != 0 || h.reserved0 != 0) return fail(Status::kCorrupt, "header: reserved fields not zero");
+  if (h.flags != 0 || h.reserved0 != 0)
+    return fail(Status::kCorrupt, "header: reserved fields not zero");
   if (h.lightmap_width == 0 || h.lightmap_height == 0 || h.lightmap_width > kMaxLightmapSize ||
       h.lightmap_height > kMaxLightmapSize) {
     return fail(Status::kCorrupt, "light-map size %ux%u out of range 1..%u", h.lightmap_width,
@@ -154,18 +173,21 @@ Status Validator::run(Parsed* out) {
   }
   // Owner indices are 16-bit with 0xFFFF meaning none; the patch's group index is 16-bit; the
   // patch's atlas index is 8-bit.
-  if (h.light_count >= kNone16) return fail(Status::kCorrupt, "too many lights (%u)", h.light_count);
+  if (h.light_count >= kNone16)
+    return fail(Status::kCorrupt, "too many lights (%u)", h.light_count);
   if (h.object_count >= kNone16) {
     return fail(Status::kCorrupt, "too many objects (%u)", h.object_count);
   }
-  if (h.group_count > 0x10000u) return fail(Status::kCorrupt, "too many groups (%u)", h.group_count);
+  if (h.group_count > 0x10000u)
+    return fail(Status::kCorrupt, "too many groups (%u)", h.group_count);
   if (h.atlas_count > 256u) return fail(Status::kCorrupt, "too many atlases (%u)", h.atlas_count);
   if (h.section_count == 0 || h.section_count > kSectionTypeMax) {
     return fail(Status::kCorrupt, "section count %u out of range 1..%u", h.section_count,
                 kSectionTypeMax);
   }
   const uint64_t index_end = sizeof(Header) + uint64_t(h.section_count) * sizeof(SectionEntry);
-  if (index_end > size_) return fail(Status::kTruncated, "section index ends past the end of the file");
+  if (index_end > size_)
+    return fail(Status::kTruncated, "section index ends past the end of the file");
 
   // Section index.
   const SectionEntry* entries = at<SectionEntry>(sizeof(Header));
@@ -176,16 +198,19 @@ Status Validator::run(Parsed* out) {
     }
     if (e.reserved != 0) return fail(Status::kCorrupt, "section %u: reserved field not zero", i);
     Section& s = sections_[e.type];
-    if (s.present) return fail(Status::kCorrupt, "section %u: second %s section", i, section_name(e.type));
+    if (s.present)
+      return fail(Status::kCorrupt, "section %u: second %s section", i, section_name(e.type));
     if (e.offset % kSectionAlignment != 0) {
       return fail(Status::kCorrupt, "%s section: offset %llu not a multiple of %u",
-                  section_name(e.type), static_cast<unsigned long long>(e.offset), kSectionAlignment);
+                  section_name(e.type), static_cast<unsigned long long>(e.offset),
+                  kSectionAlignment);
     }
     if (!range_inside(e.offset, e.length, index_end, size_ - index_end)) {
       return fail(e.offset < index_end ? Status::kCorrupt : Status::kTruncated,
                   "%s section: bytes %llu+%llu outside the file's %llu bytes after the index",
                   section_name(e.type), static_cast<unsigned long long>(e.offset),
-                  static_cast<unsigned long long>(e.length), static_cast<unsigned long long>(size_));
+                  static_cast<unsigned long long>(e.length),
+                  static_cast<unsigned long long>(size_));
     }
     s.present = true;
     s.offset = e.offset;
@@ -206,9 +231,11 @@ Status Validator::run(Parsed* out) {
   const uint32_t required[] = {kSectionLights,  kSectionObjects,   kSectionGroups, kSectionPatches,
                                kSectionAtlases, kSectionAtlasData, kSectionStrings};
   for (uint32_t t : required) {
-    if (!sections_[t].present) return fail(Status::kCorrupt, "required %s section missing", section_name(t));
+    if (!sections_[t].present)
+      return fail(Status::kCorrupt, "required %s section missing", section_name(t));
   }
-  if (h.mesh_count > 0 && (!sections_[kSectionMeshes].present || !sections_[kSectionMeshData].present)) {
+  if (h.mesh_count > 0 &&
+      (!sections_[kSectionMeshes].present || !sections_[kSectionMeshData].present)) {
     return fail(Status::kCorrupt, "%u meshes but no mesh or mesh-data section", h.mesh_count);
   }
   struct Counted {
@@ -240,8 +267,8 @@ Status Validator::run(Parsed* out) {
     crc = crc32(b_ + e.offset, e.length, crc);
   }
   if (crc != h.table_checksum) {
-    return fail(Status::kChecksumMismatch, "table checksum %08x does not match the stored %08x", crc,
-                h.table_checksum);
+    return fail(Status::kChecksumMismatch, "table checksum %08x does not match the stored %08x",
+                crc, h.table_checksum);
   }
 
   const LightRecord* lights = at<LightRecord>(sections_[kSectionLights].offset);
@@ -249,12 +276,14 @@ Status Validator::run(Parsed* out) {
   const GroupRecord* groups = at<GroupRecord>(sections_[kSectionGroups].offset);
   const PatchRecord* patches = at<PatchRecord>(sections_[kSectionPatches].offset);
   const AtlasRecord* atlases = at<AtlasRecord>(sections_[kSectionAtlases].offset);
-  const MeshRecord* meshes =
-      sections_[kSectionMeshes].present ? at<MeshRecord>(sections_[kSectionMeshes].offset) : nullptr;
+  const MeshRecord* meshes = sections_[kSectionMeshes].present
+                                 ? at<MeshRecord>(sections_[kSectionMeshes].offset)
+                                 : nullptr;
 
   for (uint32_t i = 0; i < h.light_count; ++i) {
     const LightRecord& l = lights[i];
-    if (Status s = check_name("light", i, l.name_offset, l.name_length, false); s != Status::kOk) return s;
+    if (Status s = check_name("light", i, l.name_offset, l.name_length, false); s != Status::kOk)
+      return s;
     for (int c = 0; c < 3; ++c) {
       if (!finite_non_negative(l.color[c])) {
         return fail(Status::kCorrupt, "light %u: colour component %d is not finite and >= 0", i, c);
@@ -263,12 +292,14 @@ Status Validator::run(Parsed* out) {
     if (!finite_non_negative(l.intensity)) {
       return fail(Status::kCorrupt, "light %u: intensity is not finite and >= 0", i);
     }
-    if (l.type > kLightDirectional) return fail(Status::kCorrupt, "light %u: unknown type %u", i, l.type);
+    if (l.type > kLightDirectional)
+      return fail(Status::kCorrupt, "light %u: unknown type %u", i, l.type);
     if (l.reserved != 0) return fail(Status::kCorrupt, "light %u: reserved field not zero", i);
   }
   for (uint32_t i = 0; i < h.object_count; ++i) {
     const ObjectRecord& o = objects[i];
-    if (Status s = check_name("object", i, o.name_offset, o.name_length, false); s != Status::kOk) return s;
+    if (Status s = check_name("object", i, o.name_offset, o.name_length, false); s != Status::kOk)
+      return s;
     if (o.reserved[0] != 0 || o.reserved[1] != 0) {
       return fail(Status::kCorrupt, "object %u: reserved field not zero", i);
     }
@@ -277,9 +308,10 @@ Status Validator::run(Parsed* out) {
   const Section& atlas_data = sections_[kSectionAtlasData];
   for (uint32_t i = 0; i < h.atlas_count; ++i) {
     const AtlasRecord& a = atlases[i];
-    if (!is_pow2(a.width) || !is_pow2(a.height) || a.width > kMaxAtlasSize || a.height > kMaxAtlasSize) {
-      return fail(Status::kCorrupt, "atlas %u: size %ux%u is not a power of two up to %u", i, a.width,
-                  a.height, kMaxAtlasSize);
+    if (!is_pow2(a.width) || !is_pow2(a.height) || a.width > kMaxAtlasSize ||
+        a.height > kMaxAtlasSize) {
+      return fail(Status::kCorrupt, "atlas %u: size %ux%u is not a power of two up to %u", i,
+                  a.width, a.height, kMaxAtlasSize);
     }
     if (a.data_offset % kSectionAlignment != 0) {
       return fail(Status::kCorrupt, "atlas %u: data offset %llu not a multiple of %u", i,
@@ -288,7 +320,8 @@ Status Validator::run(Parsed* out) {
     const uint64_t bytes = uint64_t(a.width) * a.height * 4;
     if (!range_inside(a.data_offset, bytes, atlas_data.offset, atlas_data.length)) {
       return fail(Status::kCorrupt, "atlas %u: pixels %llu+%llu outside the atlas-data section", i,
-                  static_cast<unsigned long long>(a.data_offset), static_cast<unsigned long long>(bytes));
+                  static_cast<unsigned long long>(a.data_offset),
+                  static_cast<unsigned long long>(bytes));
     }
   }
 
@@ -323,16 +356,18 @@ Status Validator::run(Parsed* out) {
                   group_kind_name(g.kind), g.light, g.object_a, g.object_b);
     }
     if (i > 0 && group_key(groups[i - 1]) >= group_key(g)) {
-      return fail(Status::kCorrupt, "group %u: not sorted after group %u (or a duplicate owner)", i, i - 1);
+      return fail(Status::kCorrupt, "group %u: not sorted after group %u (or a duplicate owner)", i,
+                  i - 1);
     }
     if (g.patch_count == 0) return fail(Status::kCorrupt, "group %u: no patches", i);
     if (g.first_patch != expected_first) {
-      return fail(Status::kCorrupt, "group %u: first patch %u, expected %u (groups must be contiguous)",
-                  i, g.first_patch, expected_first);
+      return fail(Status::kCorrupt,
+                  "group %u: first patch %u, expected %u (groups must be contiguous)", i,
+                  g.first_patch, expected_first);
     }
     if (!range_inside(g.first_patch, g.patch_count, 0, h.patch_count)) {
-      return fail(Status::kCorrupt, "group %u: patches %u+%u exceed the %u patches", i, g.first_patch,
-                  g.patch_count, h.patch_count);
+      return fail(Status::kCorrupt, "group %u: patches %u+%u exceed the %u patches", i,
+                  g.first_patch, g.patch_count, h.patch_count);
     }
     expected_first = g.first_patch + g.patch_count;
   }
@@ -342,31 +377,39 @@ Status Validator::run(Parsed* out) {
 
   for (uint32_t i = 0; i < h.patch_count; ++i) {
     const PatchRecord& p = patches[i];
-    if (p.group >= h.group_count) return fail(Status::kCorrupt, "patch %u: group %u out of range", i, p.group);
+    if (p.group >= h.group_count)
+      return fail(Status::kCorrupt, "patch %u: group %u out of range", i, p.group);
     const GroupRecord& g = groups[p.group];
     if (i < g.first_patch || i - g.first_patch >= g.patch_count) {
       return fail(Status::kCorrupt, "patch %u: outside the range of its group %u", i, p.group);
     }
-    if (p.atlas >= h.atlas_count) return fail(Status::kCorrupt, "patch %u: atlas %u out of range", i, p.atlas);
-    if (p.width == 0 || p.height == 0) return fail(Status::kCorrupt, "patch %u: empty rectangle", i);
+    if (p.atlas >= h.atlas_count)
+      return fail(Status::kCorrupt, "patch %u: atlas %u out of range", i, p.atlas);
+    if (p.width == 0 || p.height == 0)
+      return fail(Status::kCorrupt, "patch %u: empty rectangle", i);
     const AtlasRecord& a = atlases[p.atlas];
     if (uint32_t(p.atlas_x) + p.width > a.width || uint32_t(p.atlas_y) + p.height > a.height) {
-      return fail(Status::kCorrupt, "patch %u: atlas rectangle %u+%u x %u+%u exceeds atlas %u (%ux%u)", i,
-                  p.atlas_x, p.width, p.atlas_y, p.height, p.atlas, a.width, a.height);
+      return fail(Status::kCorrupt,
+                  "patch %u: atlas rectangle %u+%u x %u+%u exceeds atlas %u (%ux%u)", i, p.atlas_x,
+                  p.width, p.atlas_y, p.height, p.atlas, a.width, a.height);
     }
     if (uint32_t(p.dest_x) + p.width > h.lightmap_width) {
-      return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds light-map width %u", i,
-                  p.dest_x, p.width, h.lightmap_width);
+      return fail(Status::kCorrupt,
+                  "patch %u: destination rectangle %u+%u exceeds light-map width %u", i, p.dest_x,
+                  p.width, h.lightmap_width);
     }
     if (uint32_t(p.dest_y) + p.height > h.lightmap_height) {
-      return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds light-map height %u",
-                  i, p.dest_y, p.height, h.lightmap_height);
+      return fail(Status::kCorrupt,
+                  "patch %u: destination rectangle %u+%u exceeds light-map height %u", i, p.dest_y,
+                  p.height, h.lightmap_height);
     }
     if (p.channel_count != 1 && p.channel_count != 3) {
-      return fail(Status::kCorrupt, "patch %u: channel count %u (must be 1 or 3)", i, p.channel_count);
+      return fail(Status::kCorrupt, "patch %u: channel count %u (must be 1 or 3)", i,
+                  p.channel_count);
     }
     if (uint32_t(p.channel) + p.channel_count > 4) {
-      return fail(Status::kCorrupt, "patch %u: channels %u+%u exceed RGBA", i, p.channel, p.channel_count);
+      return fail(Status::kCorrupt, "patch %u: channels %u+%u exceed RGBA", i, p.channel,
+                  p.channel_count);
     }
     if (p.encoding != kEncodingLinear && p.encoding != kEncodingSquare) {
       return fail(Status::kCorrupt, "patch %u: unknown encoding %u", i, p.encoding);
@@ -375,7 +418,8 @@ Status Validator::run(Parsed* out) {
       return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
     }
     if ((p.flags & ~uint32_t(kFlagNegative)) != 0 || p.reserved != 0) {
-      return fail(Status::kCorrupt, "patch %u: unknown flags %02x or reserved byte not zero", i, p.flags);
+      return fail(Status::kCorrupt, "patch %u: unknown flags %02x or reserved byte not zero", i,
+                  p.flags);
     }
   }
 
@@ -383,24 +427,28 @@ Status Validator::run(Parsed* out) {
     const Section& md = sections_[kSectionMeshData];
     for (uint32_t i = 0; i < h.mesh_count; ++i) {
       const MeshRecord& m = meshes[i];
-      if (Status s = check_name("mesh", i, m.name_offset, m.name_length, true); s != Status::kOk) return s;
+      if (Status s = check_name("mesh", i, m.name_offset, m.name_length, true); s != Status::kOk)
+        return s;
       if (m.object != kNone16 && m.object >= h.object_count) {
         return fail(Status::kCorrupt, "mesh %u: object %u out of range", i, m.object);
       }
-      if (m.reserved0 != 0 || m.reserved1 != 0) return fail(Status::kCorrupt, "mesh %u: reserved field not zero", i);
+      if (m.reserved0 != 0 || m.reserved1 != 0)
+        return fail(Status::kCorrupt, "mesh %u: reserved field not zero", i);
       if (m.vertex_offset % 4 != 0 || m.index_offset % 4 != 0) {
         return fail(Status::kCorrupt, "mesh %u: vertex or index offset not 4-byte aligned", i);
       }
-      if (!range_inside(m.vertex_offset, uint64_t(m.vertex_count) * sizeof(MeshVertex), md.offset, md.length)) {
-        return fail(Status::kCorrupt, "mesh %u: %u vertices at %llu outside the mesh-data section", i,
-                    m.vertex_count, static_cast<unsigned long long>(m.vertex_offset));
+      if (!range_inside(m.vertex_offset, uint64_t(m.vertex_count) * sizeof(MeshVertex), md.offset,
+                        md.length)) {
+        return fail(Status::kCorrupt, "mesh %u: %u vertices at %llu outside the mesh-data section",
+                    i, m.vertex_count, static_cast<unsigned long long>(m.vertex_offset));
       }
       if (!range_inside(m.index_offset, uint64_t(m.index_count) * 4, md.offset, md.length)) {
-        return fail(Status::kCorrupt, "mesh %u: %u indices at %llu outside the mesh-data section", i,
-                    m.index_count, static_cast<unsigned long long>(m.index_offset));
+        return fail(Status::kCorrupt, "mesh %u: %u indices at %llu outside the mesh-data section",
+                    i, m.index_count, static_cast<unsigned long long>(m.index_offset));
       }
       if (m.index_count % 3 != 0) {
-        return fail(Status::kCorrupt, "mesh %u: index count %u not a multiple of 3", i, m.index_count);
+        return fail(Status::kCorrupt, "mesh %u: index count %u not a multiple of 3", i,
+                    m.index_count);
       }
       const MeshVertex* v = at<MeshVertex>(m.vertex_offset);
       for (uint32_t k = 0; k < m.vertex_count; ++k) {
@@ -411,8 +459,8 @@ Status Validator::run(Parsed* out) {
       const uint32_t* idx = at<uint32_t>(m.index_offset);
       for (uint32_t k = 0; k < m.index_count; ++k) {
         if (idx[k] >= m.vertex_count) {
-          return fail(Status::kCorrupt, "mesh %u: index %u is %u, not below the vertex count %u", i, k,
-                      idx[k], m.vertex_count);
+          return fail(Status::kCorrupt, "mesh %u: index %u is %u, not below the vertex count %u", i,
+                      k, idx[k], m.vertex_count);
         }
       }
     }
@@ -464,7 +512,9 @@ Name PackView::mesh_name(uint32_t i) const {
   return Name{strings_ + meshes_[i].name_offset, meshes_[i].name_length};
 }
 
-const uint8_t* PackView::atlas_pixels(uint32_t i) const { return bytes_ + atlases_[i].data_offset; }
+const uint8_t* PackView::atlas_pixels(uint32_t i) const {
+  return bytes_ + atlases_[i].data_offset;
+}
 const MeshVertex* PackView::mesh_vertices(uint32_t i) const {
   return reinterpret_cast<const MeshVertex*>(bytes_ + meshes_[i].vertex_offset);
 }
@@ -494,14 +544,18 @@ int32_t find_group(const GroupRecord* groups, uint32_t count, const GroupRecord&
     const uint32_t mid = lo + (hi - lo) / 2;
     const uint64_t k = group_key(groups[mid]);
     if (k == key) return static_cast<int32_t>(mid);
-    if (k < key) lo = mid + 1; else hi = mid;
+    if (k < key)
+      lo = mid + 1;
+    else
+      hi = mid;
   }
   return -1;
 }
 }  // namespace
 
 int32_t PackView::base_group() const {
-  return find_group(groups_, group_count(), GroupRecord{kGroupBase, kNone16, kNone16, kNone16, 0, 0});
+  return find_group(groups_, group_count(),
+                    GroupRecord{kGroupBase, kNone16, kNone16, kNone16, 0, 0});
 }
 int32_t PackView::contribution_group(uint32_t light) const {
   if (light >= light_count()) return -1;

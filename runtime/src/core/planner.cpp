@@ -18,7 +18,9 @@ float max3(const float v[3]) {
   return m;
 }
 
-bool nonzero(const float v[3]) { return v[0] != 0.0f || v[1] != 0.0f || v[2] != 0.0f; }
+bool nonzero(const float v[3]) {
+  return v[0] != 0.0f || v[1] != 0.0f || v[2] != 0.0f;
+}
 
 bool same(const float a[3], const float b[3]) {
   return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
@@ -39,7 +41,9 @@ struct Carver {
 
 }  // namespace
 
-Planner::~Planner() { std::free(block_); }
+Planner::~Planner() {
+  std::free(block_);
+}
 
 Status Planner::init(const PackView& pack, const PlannerLimits& limits, Error* error) {
   std::free(block_);
@@ -106,7 +110,8 @@ Status Planner::init(const PackView& pack, const PlannerLimits& limits, Error* e
   // Counting sort of the references.
   for (uint32_t g = 0; g < ng; ++g) {
     const pack::GroupRecord& gr = pack.group(g);
-    group_texels_[g] = patch_prefix_[gr.first_patch + gr.patch_count] - patch_prefix_[gr.first_patch];
+    group_texels_[g] =
+        patch_prefix_[gr.first_patch + gr.patch_count] - patch_prefix_[gr.first_patch];
     float m = 0.0f;
     for (uint32_t p = gr.first_patch; p < gr.first_patch + gr.patch_count; ++p) {
       if (pack.patch(p).scale > m) m = pack.patch(p).scale;

@@ -7,7 +7,9 @@
 namespace lightpatch {
 
 namespace {
-bool finite_non_negative(float v) { return std::isfinite(v) && v >= 0.0f; }
+bool finite_non_negative(float v) {
+  return std::isfinite(v) && v >= 0.0f;
+}
 }  // namespace
 
 SceneState::~SceneState() {
@@ -16,7 +18,8 @@ SceneState::~SceneState() {
 }
 
 Status SceneState::init(const PackView& pack, Error* error) {
-  if (!pack.valid()) return set_error(error, Status::kInvalidArgument, "scene state: pack not open");
+  if (!pack.valid())
+    return set_error(error, Status::kInvalidArgument, "scene state: pack not open");
   delete[] lights_;
   delete[] visible_;
   lights_ = nullptr;
@@ -32,8 +35,8 @@ Status SceneState::init(const PackView& pack, Error* error) {
     delete[] visible_;
     lights_ = nullptr;
     visible_ = nullptr;
-    return set_error(error, Status::kOutOfMemory, "scene state: cannot allocate %u lights, %u objects",
-                     nl, no);
+    return set_error(error, Status::kOutOfMemory,
+                     "scene state: cannot allocate %u lights, %u objects", nl, no);
   }
   light_count_ = nl;
   object_count_ = no;
@@ -62,8 +65,9 @@ Status SceneState::assign(const SceneState& other) {
 }
 
 Status SceneState::set_light(uint32_t i, const LightState& state) {
-  if (i >= light_count_ || !finite_non_negative(state.intensity) || !finite_non_negative(state.color[0]) ||
-      !finite_non_negative(state.color[1]) || !finite_non_negative(state.color[2])) {
+  if (i >= light_count_ || !finite_non_negative(state.intensity) ||
+      !finite_non_negative(state.color[0]) || !finite_non_negative(state.color[1]) ||
+      !finite_non_negative(state.color[2])) {
     return Status::kInvalidArgument;
   }
   lights_[i] = state;
@@ -77,8 +81,8 @@ Status SceneState::set_light_on(uint32_t i, bool on) {
 }
 
 Status SceneState::set_light_color(uint32_t i, const float rgb[3]) {
-  if (i >= light_count_ || rgb == nullptr || !finite_non_negative(rgb[0]) || !finite_non_negative(rgb[1]) ||
-      !finite_non_negative(rgb[2])) {
+  if (i >= light_count_ || rgb == nullptr || !finite_non_negative(rgb[0]) ||
+      !finite_non_negative(rgb[1]) || !finite_non_negative(rgb[2])) {
     return Status::kInvalidArgument;
   }
   for (int c = 0; c < 3; ++c) lights_[i].color[c] = rgb[c];

@@ -7,17 +7,28 @@ namespace lightpatch {
 
 const char* status_name(Status status) {
   switch (status) {
-    case Status::kOk: return "ok";
-    case Status::kInvalidArgument: return "invalid argument";
-    case Status::kTruncated: return "truncated";
-    case Status::kBadMagic: return "not a lightpatch pack";
-    case Status::kUnsupportedVersion: return "unsupported version";
-    case Status::kCorrupt: return "corrupt";
-    case Status::kChecksumMismatch: return "checksum mismatch";
-    case Status::kOutOfMemory: return "out of memory";
-    case Status::kUnsupported: return "unsupported";
-    case Status::kGlError: return "GL error";
-    case Status::kNotFound: return "not found";
+    case Status::kOk:
+      return "ok";
+    case Status::kInvalidArgument:
+      return "invalid argument";
+    case Status::kTruncated:
+      return "truncated";
+    case Status::kBadMagic:
+      return "not a lightpatch pack";
+    case Status::kUnsupportedVersion:
+      return "unsupported version";
+    case Status::kCorrupt:
+      return "corrupt";
+    case Status::kChecksumMismatch:
+      return "checksum mismatch";
+    case Status::kOutOfMemory:
+      return "out of memory";
+    case Status::kUnsupported:
+      return "unsupported";
+    case Status::kGlError:
+      return "GL error";
+    case Status::kNotFound:
+      return "not found";
   }
   return "unknown";
 }

@@ -155,7 +155,9 @@ class CpuSink final : public DrawSink {
   Runtime& r_;
 };
 
-Runtime::~Runtime() { close(); }
+Runtime::~Runtime() {
+  close();
+}
 
 Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* error) {
   close();
@@ -420,7 +422,9 @@ Status Runtime::set_object_visible(uint32_t i, bool visible) {
   return planner_.set_object_visible(i, visible);
 }
 
-uint32_t Runtime::light_map_texture() const { return map_textures_[shown_]; }
+uint32_t Runtime::light_map_texture() const {
+  return map_textures_[shown_];
+}
 
 Status Runtime::update(uint64_t budget_texels) {
   if (!open_) return Status::kInvalidArgument;

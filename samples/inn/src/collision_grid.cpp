@@ -38,7 +38,8 @@ CollisionGrid::CollisionGrid(const World& world, float cell) : cell_(cell) {
     z0 = std::clamp(z0, 0, nz_ - 1);
     z1 = std::clamp(z1, 0, nz_ - 1);
     for (int z = z0; z <= z1; ++z)
-      for (int x = x0; x <= x1; ++x) entries.push_back({static_cast<uint32_t>(z * nx_ + x), {lo.y, hi.y}});
+      for (int x = x0; x <= x1; ++x)
+        entries.push_back({static_cast<uint32_t>(z * nx_ + x), {lo.y, hi.y}});
   }
   std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
     return a.cell != b.cell ? a.cell < b.cell : a.span.y0 < b.span.y0;
@@ -62,7 +63,8 @@ CollisionGrid::CollisionGrid(const World& world, float cell) : cell_(cell) {
   first_.back() = static_cast<uint32_t>(spans_.size());
 }
 
-bool CollisionGrid::cell_range(glm::vec3 p, float radius, int* x0, int* z0, int* x1, int* z1) const {
+bool CollisionGrid::cell_range(glm::vec3 p, float radius, int* x0, int* z0, int* x1,
+                               int* z1) const {
   *x0 = std::max(0, static_cast<int>(std::floor((p.x - radius - origin_.x) / cell_)));
   *x1 = std::min(nx_ - 1, static_cast<int>(std::floor((p.x + radius - origin_.x) / cell_)));
   *z0 = std::max(0, static_cast<int>(std::floor((p.z - radius - origin_.y) / cell_)));
@@ -77,8 +79,10 @@ bool CollisionGrid::blocked(glm::vec3 feet, float radius, float step, float heig
   for (int z = z0; z <= z1; ++z) {
     for (int x = x0; x <= x1; ++x) {
       // Only cells that meet the disc (closest point of the cell's square within the radius).
-      const float cx = std::clamp(feet.x, origin_.x + static_cast<float>(x) * cell_, origin_.x + static_cast<float>(x + 1) * cell_);
-      const float cz = std::clamp(feet.z, origin_.y + static_cast<float>(z) * cell_, origin_.y + static_cast<float>(z + 1) * cell_);
+      const float cx = std::clamp(feet.x, origin_.x + static_cast<float>(x) * cell_,
+                                  origin_.x + static_cast<float>(x + 1) * cell_);
+      const float cz = std::clamp(feet.z, origin_.y + static_cast<float>(z) * cell_,
+                                  origin_.y + static_cast<float>(z + 1) * cell_);
       if ((cx - feet.x) * (cx - feet.x) + (cz - feet.z) * (cz - feet.z) > radius * radius) continue;
       const size_t c = static_cast<size_t>(z) * static_cast<size_t>(nx_) + static_cast<size_t>(x);
       for (uint32_t s = first_[c]; s < first_[c + 1]; ++s) {
@@ -89,7 +93,8 @@ bool CollisionGrid::blocked(glm::vec3 feet, float radius, float step, float heig
   return false;
 }
 
-std::optional<float> CollisionGrid::floor_at(glm::vec3 feet, float radius, float step, float drop) const {
+std::optional<float> CollisionGrid::floor_at(glm::vec3 feet, float radius, float step,
+                                             float drop) const {
   int x0, z0, x1, z1;
   if (!cell_range(feet, radius, &x0, &z0, &x1, &z1)) return std::nullopt;
   std::optional<float> best;

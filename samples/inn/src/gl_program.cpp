@@ -16,7 +16,8 @@ GLuint compile(GLenum type, const char* source, char* message, unsigned message_
   if (!ok) {
     char log[512] = {};
     glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    std::snprintf(message, message_size, "%s shader: %s", type == GL_VERTEX_SHADER ? "vertex" : "fragment", log);
+    std::snprintf(message, message_size, "%s shader: %s",
+                  type == GL_VERTEX_SHADER ? "vertex" : "fragment", log);
     glDeleteShader(shader);
     return 0;
   }
@@ -25,8 +26,8 @@ GLuint compile(GLenum type, const char* source, char* message, unsigned message_
 
 }  // namespace
 
-uint32_t build_program(const char* vertex_source, const char* fragment_source, const char* const* attributes,
-                       char* message, unsigned message_size) {
+uint32_t build_program(const char* vertex_source, const char* fragment_source,
+                       const char* const* attributes, char* message, unsigned message_size) {
   const GLuint vs = compile(GL_VERTEX_SHADER, vertex_source, message, message_size);
   if (!vs) return 0;
   const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment_source, message, message_size);
@@ -37,7 +38,8 @@ uint32_t build_program(const char* vertex_source, const char* fragment_source, c
   const GLuint program = glCreateProgram();
   glAttachShader(program, vs);
   glAttachShader(program, fs);
-  for (GLuint i = 0; attributes && attributes[i]; ++i) glBindAttribLocation(program, i, attributes[i]);
+  for (GLuint i = 0; attributes && attributes[i]; ++i)
+    glBindAttribLocation(program, i, attributes[i]);
   glLinkProgram(program);
   glDeleteShader(vs);
   glDeleteShader(fs);

@@ -7,9 +7,9 @@
 namespace lightpatch::inn {
 namespace {
 
-constexpr float kReach = 2.6f;        // metres from the eye to something the player can use
-constexpr float kAltarReach = 3.2f;   // metres from the eye to a placed copy's spot
-constexpr float kMinFacing = 0.8f;    // cosine of the widest angle off the view direction
+constexpr float kReach = 2.6f;       // metres from the eye to something the player can use
+constexpr float kAltarReach = 3.2f;  // metres from the eye to a placed copy's spot
+constexpr float kMinFacing = 0.8f;   // cosine of the widest angle off the view direction
 
 std::string pretty(const std::string& name) {
   std::string s = name;
@@ -17,7 +17,9 @@ std::string pretty(const std::string& name) {
   return s;
 }
 
-float max3(const float v[3]) { return std::max(v[0], std::max(v[1], v[2])); }
+float max3(const float v[3]) {
+  return std::max(v[0], std::max(v[1], v[2]));
+}
 
 uint32_t light_index(const Runtime& rt, const std::string& name) {
   const int32_t i = rt.find_light(name.c_str());
@@ -33,7 +35,8 @@ uint32_t object_index(const Runtime& rt, const std::string& name) {
 
 }  // namespace
 
-InnGame::InnGame(Runtime& runtime, const World& world, const nlohmann::json& scenario) : rt_(runtime), world_(world) {
+InnGame::InnGame(Runtime& runtime, const World& world, const nlohmann::json& scenario)
+    : rt_(runtime), world_(world) {
   lights_.resize(rt_.light_count());
   authored_factor_.resize(rt_.light_count());
   for (uint32_t l = 0; l < rt_.light_count(); ++l) {
@@ -44,7 +47,8 @@ InnGame::InnGame(Runtime& runtime, const World& world, const nlohmann::json& sce
   }
   const auto& items = scenario.at("items");
   const auto& placed = scenario.at("placed_items");
-  if (items.size() != placed.size()) throw std::runtime_error("scenario: items and placed_items differ in length");
+  if (items.size() != placed.size())
+    throw std::runtime_error("scenario: items and placed_items differ in length");
   for (size_t i = 0; i < items.size(); ++i) {
     Item it;
     it.name = items[i].get<std::string>();
@@ -67,12 +71,14 @@ InnGame::InnGame(Runtime& runtime, const World& world, const nlohmann::json& sce
     if (action == "place") altar_room_ = room;
     if (action == "spell_done" && !node.empty()) {
       spell_light_ = static_cast<int32_t>(light_index(rt_, node));
-      if (step.contains("state") && step["state"].contains("lights") && step["state"]["lights"].contains(node)) {
+      if (step.contains("state") && step["state"].contains("lights") &&
+          step["state"]["lights"].contains(node)) {
         const auto& s = step["state"]["lights"][node];
         spell_state_ = lights_[static_cast<uint32_t>(spell_light_)];
         spell_state_.on = s.value("on", true);
         if (s.contains("color")) {
-          for (int c = 0; c < 3; ++c) spell_state_.color[c] = s["color"][static_cast<size_t>(c)].get<float>();
+          for (int c = 0; c < 3; ++c)
+            spell_state_.color[c] = s["color"][static_cast<size_t>(c)].get<float>();
         }
         if (s.contains("intensity")) spell_state_.intensity = s["intensity"].get<float>();
       }
@@ -86,7 +92,8 @@ void InnGame::apply_state(const nlohmann::json& state) {
       const uint32_t l = light_index(rt_, name);
       if (s.contains("on")) lights_[l].on = s["on"].get<bool>();
       if (s.contains("color")) {
-        for (int c = 0; c < 3; ++c) lights_[l].color[c] = s["color"].at(static_cast<size_t>(c)).get<float>();
+        for (int c = 0; c < 3; ++c)
+          lights_[l].color[c] = s["color"].at(static_cast<size_t>(c)).get<float>();
       }
       if (s.contains("intensity")) lights_[l].intensity = s["intensity"].get<float>();
       push_light(l);
@@ -100,7 +107,9 @@ void InnGame::apply_state(const nlohmann::json& state) {
   }
 }
 
-void InnGame::push_light(uint32_t l) { rt_.set_light(l, lights_[l]); }
+void InnGame::push_light(uint32_t l) {
+  rt_.set_light(l, lights_[l]);
+}
 
 bool InnGame::set_light_on(uint32_t light, bool on) {
   if (light >= lights_.size() || lights_[light].on == on) return false;
@@ -149,7 +158,8 @@ uint32_t InnGame::placed_count() const {
 InnGame::Target InnGame::target(glm::vec3 eye, glm::vec3 forward) const {
   Target best;
   float best_score = 1e30f;
-  auto consider = [&](Target::Kind kind, uint32_t index, glm::vec3 at, float reach, const std::string& label) {
+  auto consider = [&](Target::Kind kind, uint32_t index, glm::vec3 at, float reach,
+                      const std::string& label) {
     const glm::vec3 d = at - eye;
     const float dist = glm::length(d);
     if (dist > reach) return;
@@ -163,18 +173,20 @@ InnGame::Target InnGame::target(glm::vec3 eye, glm::vec3 forward) const {
   };
   for (uint32_t l = 0; l < lights_.size(); ++l) {
     if (world_.lights[l].kind == LightKind::kOther) continue;
-    if (spell_done_ && static_cast<int32_t>(l) == spell_light_) continue;  // the spell's fire stays lit
+    if (spell_done_ && static_cast<int32_t>(l) == spell_light_)
+      continue;  // the spell's fire stays lit
     consider(Target::kLight, l, world_.lights[l].position, kReach,
              (lights_[l].on ? "snuff the " : "light the ") + pretty(world_.lights[l].name));
   }
   if (book_ >= 0 && !book_taken_) {
-    consider(Target::kTake, static_cast<uint32_t>(book_), world_.objects[static_cast<size_t>(book_)].center, kReach,
-             "take the spell book");
+    consider(Target::kTake, static_cast<uint32_t>(book_),
+             world_.objects[static_cast<size_t>(book_)].center, kReach, "take the spell book");
   }
   for (uint32_t i = 0; i < items_.size(); ++i) {
     const Item& it = items_[i];
     if (!it.carried && !it.is_placed) {
-      consider(Target::kTake, it.object, world_.objects[it.object].center, kReach, "take the " + pretty(it.name));
+      consider(Target::kTake, it.object, world_.objects[it.object].center, kReach,
+               "take the " + pretty(it.name));
     }
     if (it.carried) {
       // The spot matters more than the aim: prefer placing when the player stands at the altar.
@@ -194,7 +206,8 @@ std::string InnGame::interact(glm::vec3 eye, glm::vec3 forward) {
     case Target::kLight: {
       const bool on = !lights_[t.index].on;
       set_light_on(t.index, on);
-      return std::string(on ? "You light the " : "You snuff the ") + pretty(world_.lights[t.index].name) + ".";
+      return std::string(on ? "You light the " : "You snuff the ") +
+             pretty(world_.lights[t.index].name) + ".";
     }
     case Target::kTake:
       take(t.index);
@@ -208,7 +221,8 @@ std::string InnGame::interact(glm::vec3 eye, glm::vec3 forward) {
       }
       return line;
     }
-    case Target::kNone: break;
+    case Target::kNone:
+      break;
   }
   return "";
 }
@@ -216,7 +230,8 @@ std::string InnGame::interact(glm::vec3 eye, glm::vec3 forward) {
 std::string InnGame::objective() const {
   if (spell_done_) return "The spell is cast: the hearth burns violet. (Esc quits)";
   if (book_ >= 0 && !book_taken_) {
-    return "Find the spell book" + (book_room_.empty() ? std::string() : " (" + pretty(book_room_) + ")") +
+    return "Find the spell book" +
+           (book_room_.empty() ? std::string() : " (" + pretty(book_room_) + ")") +
            ". Light candles and torches to see (E).";
   }
   uint32_t carried = 0;
@@ -230,9 +245,10 @@ std::string InnGame::objective() const {
     }
   }
   std::string s = "Place every ingredient on the altar by the " +
-                  (altar_room_.empty() ? std::string("main") : pretty(altar_room_)) + " fireplace: " +
-                  std::to_string(placed_count()) + "/" + std::to_string(items_.size()) + " placed, " +
-                  std::to_string(carried) + " carried.";
+                  (altar_room_.empty() ? std::string("main") : pretty(altar_room_)) +
+                  " fireplace: " + std::to_string(placed_count()) + "/" +
+                  std::to_string(items_.size()) + " placed, " + std::to_string(carried) +
+                  " carried.";
   if (!missing.empty()) s += "\nStill to find: " + missing;
   return s;
 }
@@ -254,15 +270,24 @@ bool InnGame::object_landed(uint32_t o) const {
 float InnGame::flicker(uint32_t l, double t, float* tint) const {
   float amplitude = 0.1f;
   switch (world_.lights[l].kind) {
-    case LightKind::kCandle: amplitude = 0.12f; break;
-    case LightKind::kTorch: amplitude = 0.18f; break;
-    case LightKind::kFire: amplitude = 0.25f; break;
-    case LightKind::kOther: amplitude = 0.1f; break;
+    case LightKind::kCandle:
+      amplitude = 0.12f;
+      break;
+    case LightKind::kTorch:
+      amplitude = 0.18f;
+      break;
+    case LightKind::kFire:
+      amplitude = 0.25f;
+      break;
+    case LightKind::kOther:
+      amplitude = 0.1f;
+      break;
   }
   // A few incommensurate sines per light, phase-shifted by the light's index: smooth, never
   // repeating visibly, and the same for the same time (scripted runs are reproducible).
   const double p = 1.7 * l;
-  const double n = 0.5 * std::sin(2.0 * 3.14159265 * 1.3 * t + p) + 0.3 * std::sin(2.0 * 3.14159265 * 3.7 * t + 2.1 * p) +
+  const double n = 0.5 * std::sin(2.0 * 3.14159265 * 1.3 * t + p) +
+                   0.3 * std::sin(2.0 * 3.14159265 * 3.7 * t + 2.1 * p) +
                    0.2 * std::sin(2.0 * 3.14159265 * 7.9 * t + 3.3 * p);
   const float k = static_cast<float>(n) * amplitude;  // in [-amplitude, amplitude]
   // Dimmer moments are redder, as a flame that cools.
@@ -306,7 +331,8 @@ uint32_t InnGame::animate(double time_s, uint64_t budget) {
     ++updated;
   }
   // Lights the budget skipped this frame come first next frame.
-  flicker_cursor_ = first_skipped >= 0 ? static_cast<uint32_t>(first_skipped) : (flicker_cursor_ + 1) % std::max(n, 1u);
+  flicker_cursor_ = first_skipped >= 0 ? static_cast<uint32_t>(first_skipped)
+                                       : (flicker_cursor_ + 1) % std::max(n, 1u);
   return updated;
 }
 

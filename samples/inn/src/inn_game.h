@@ -35,8 +35,8 @@ class InnGame {
 
   // Gameplay actions; false (and nothing changes) when the action does not apply.
   bool set_light_on(uint32_t light, bool on);
-  bool take(uint32_t object);         // a visible ingredient or the spell book
-  bool place(uint32_t item);          // a carried ingredient (index into items())
+  bool take(uint32_t object);  // a visible ingredient or the spell book
+  bool place(uint32_t item);   // a carried ingredient (index into items())
   void complete_spell();
 
   // What the interaction key would do for a player at `eye` looking along `forward`.
@@ -86,8 +86,8 @@ class InnGame {
 
   Runtime& rt_;
   const World& world_;
-  std::vector<LightState> lights_;       // base (unflickered) state per light
-  std::vector<float> authored_factor_;   // max channel of authored colour * intensity
+  std::vector<LightState> lights_;      // base (unflickered) state per light
+  std::vector<float> authored_factor_;  // max channel of authored colour * intensity
   std::vector<Item> items_;
   int32_t book_ = -1;
   bool book_taken_ = false;

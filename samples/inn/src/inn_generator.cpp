@@ -54,15 +54,21 @@ struct Room {
 // Unit facing (into the room) of a wall.
 glm::vec3 wall_normal(Wall w) {
   switch (w) {
-    case Wall::kNegX: return {1, 0, 0};
-    case Wall::kPosX: return {-1, 0, 0};
-    case Wall::kNegZ: return {0, 0, 1};
-    case Wall::kPosZ: return {0, 0, -1};
+    case Wall::kNegX:
+      return {1, 0, 0};
+    case Wall::kPosX:
+      return {-1, 0, 0};
+    case Wall::kNegZ:
+      return {0, 0, 1};
+    case Wall::kPosZ:
+      return {0, 0, -1};
   }
   return {0, 0, 1};
 }
 
-float yaw_facing(glm::vec3 dir) { return std::atan2(dir.x, dir.z); }
+float yaw_facing(glm::vec3 dir) {
+  return std::atan2(dir.x, dir.z);
+}
 
 // A rectangle of size (W, H) in a plane origin + U·u + V·v with rectangular holes
 // (u0, v0, u1, v1), split into quads; faces U × V.
@@ -81,12 +87,14 @@ void add_panel(Parts& p, int material, glm::vec3 origin, glm::vec3 U, glm::vec3 
       const float cu = 0.5f * (u[i] + u[i + 1]);
       const float cv = 0.5f * (v[j] + v[j + 1]);
       bool in_hole = false;
-      for (const glm::vec4& h : holes) in_hole = in_hole || (cu > h.x && cu < h.z && cv > h.y && cv < h.w);
+      for (const glm::vec4& h : holes)
+        in_hole = in_hole || (cu > h.x && cu < h.z && cv > h.y && cv < h.w);
       if (in_hole || u[i + 1] - u[i] < 1e-4f || v[j + 1] - v[j] < 1e-4f) continue;
       const int nu = std::max(1, static_cast<int>(std::ceil((u[i + 1] - u[i]) / cell)));
       const int nv = std::max(1, static_cast<int>(std::ceil((v[j + 1] - v[j]) / cell)));
       p.add(material, make_quad(origin + U * u[i] + V * v[j], origin + U * u[i + 1] + V * v[j],
-                                origin + U * u[i + 1] + V * v[j + 1], origin + U * u[i] + V * v[j + 1], nu, nv));
+                                origin + U * u[i + 1] + V * v[j + 1],
+                                origin + U * u[i] + V * v[j + 1], nu, nv));
     }
   }
 }
@@ -103,7 +111,9 @@ void add_tunnel(Parts& p, int material, glm::vec3 min, glm::vec3 max, int axis) 
       face.positions.push_back(box.positions[static_cast<std::size_t>(4 * f + k)]);
       face.normals.push_back(box.normals[static_cast<std::size_t>(4 * f + k)]);
     }
-    for (int k = 0; k < 6; ++k) face.indices.push_back(box.indices[static_cast<std::size_t>(6 * f + k)] - 4u * static_cast<std::uint32_t>(f));
+    for (int k = 0; k < 6; ++k)
+      face.indices.push_back(box.indices[static_cast<std::size_t>(6 * f + k)] -
+                             4u * static_cast<std::uint32_t>(f));
     g.append(face);
   }
   p.add(material, g);
@@ -112,9 +122,12 @@ void add_tunnel(Parts& p, int material, glm::vec3 min, glm::vec3 max, int axis) 
 class InnBuilder {
  public:
   explicit InnBuilder(const InnOptions& options)
-      : options_(options), rng_(0x1A2B3C4Dull ^ (static_cast<std::uint64_t>(options.seed) * 0x9E3779B97F4A7C15ull)) {
-    if (options.scale == InnScale::kSmall) detail_ = Detail{0, 10};
-    else detail_ = Detail{1, 16};
+      : options_(options),
+        rng_(0x1A2B3C4Dull ^ (static_cast<std::uint64_t>(options.seed) * 0x9E3779B97F4A7C15ull)) {
+    if (options.scale == InnScale::kSmall)
+      detail_ = Detail{0, 10};
+    else
+      detail_ = Detail{1, 16};
   }
 
   Inn build();
@@ -127,14 +140,18 @@ class InnBuilder {
   void add_window(const std::string& name, Wall w, float center, bool curtains);
   void add_stairs(const std::string& upper, const std::string& lower, glm::vec4 hole);
   // Lights.
-  void semi_light(const std::string& name, const std::string& room, LightType type, glm::vec3 pos, glm::vec3 dir,
-                  glm::vec3 color, float intensity, float radius, bool on, float range);
-  void static_light(const std::string& name, LightType type, glm::vec3 pos, glm::vec3 dir, glm::vec3 color,
-                    float intensity, float outer = 0.0f);
-  void candle(const std::string& name, const std::string& room, glm::vec3 pos, float height, bool on);
-  void torch(const std::string& name, const std::string& room, glm::vec3 pos_on_wall, glm::vec3 facing, bool on);
+  void semi_light(const std::string& name, const std::string& room, LightType type, glm::vec3 pos,
+                  glm::vec3 dir, glm::vec3 color, float intensity, float radius, bool on,
+                  float range);
+  void static_light(const std::string& name, LightType type, glm::vec3 pos, glm::vec3 dir,
+                    glm::vec3 color, float intensity, float outer = 0.0f);
+  void candle(const std::string& name, const std::string& room, glm::vec3 pos, float height,
+              bool on);
+  void torch(const std::string& name, const std::string& room, glm::vec3 pos_on_wall,
+             glm::vec3 facing, bool on);
   // Objects.
-  void object(const std::string& name, const std::string& room, const Parts& parts, glm::vec3 pos, float yaw);
+  void object(const std::string& name, const std::string& room, const Parts& parts, glm::vec3 pos,
+              float yaw);
   void item(int which, const std::string& room, glm::vec3 pos, float yaw);
 
   void full_layout();
@@ -240,14 +257,18 @@ void InnBuilder::build_shell(Room& r) {
             holes_for(Wall::kPosZ, r.max.x, -1), cell);
   // Floor: U = +Z, V = +X faces +Y; ceiling: U = +X, V = +Z faces −Y.
   std::vector<glm::vec4> fh, ch;
-  for (const glm::vec4& h : r.floor_holes) fh.emplace_back(h.y - r.min.z, h.x - r.min.x, h.w - r.min.z, h.z - r.min.x);
-  for (const glm::vec4& h : r.ceiling_holes) ch.emplace_back(h.x - r.min.x, h.y - r.min.z, h.z - r.min.x, h.w - r.min.z);
+  for (const glm::vec4& h : r.floor_holes)
+    fh.emplace_back(h.y - r.min.z, h.x - r.min.x, h.w - r.min.z, h.z - r.min.x);
+  for (const glm::vec4& h : r.ceiling_holes)
+    ch.emplace_back(h.x - r.min.x, h.y - r.min.z, h.z - r.min.x, h.w - r.min.z);
   add_panel(r.parts, r.floor_material, r.min, {0, 0, 1}, {1, 0, 0}, s.z, s.x, fh, cell);
-  add_panel(r.parts, r.wall_material, {r.min.x, r.max.y, r.min.z}, {1, 0, 0}, {0, 0, 1}, s.x, s.z, ch, cell);
+  add_panel(r.parts, r.wall_material, {r.min.x, r.max.y, r.min.z}, {1, 0, 0}, {0, 0, 1}, s.x, s.z,
+            ch, cell);
   // Skirting boards and ceiling beams (full scale).
   if (detail_.bevel_segments > 0 && r.beams) {
     for (float x = r.min.x + 1.2f; x < r.max.x - 0.6f; x += 1.6f) {
-      r.parts.add(kWoodDark, rbox(detail_, {x - 0.1f, r.max.y - 0.25f, r.min.z}, {x + 0.1f, r.max.y + 0.01f, r.max.z}, 0.02f));
+      r.parts.add(kWoodDark, rbox(detail_, {x - 0.1f, r.max.y - 0.25f, r.min.z},
+                                  {x + 0.1f, r.max.y + 0.01f, r.max.z}, 0.02f));
     }
   }
 }
@@ -255,7 +276,10 @@ void InnBuilder::build_shell(Room& r) {
 void InnBuilder::add_door(const std::string& a, Wall wa, const std::string& b, float center) {
   Room& ra = room(a);
   Room& rb = room(b);
-  const Wall wb = wa == Wall::kPosX ? Wall::kNegX : wa == Wall::kNegX ? Wall::kPosX : wa == Wall::kPosZ ? Wall::kNegZ : Wall::kPosZ;
+  const Wall wb = wa == Wall::kPosX   ? Wall::kNegX
+                  : wa == Wall::kNegX ? Wall::kPosX
+                  : wa == Wall::kPosZ ? Wall::kNegZ
+                                      : Wall::kPosZ;
   const float w = 1.0f, h = 2.1f;
   ra.openings.push_back({wa, center, w, 0.0f, h});
   rb.openings.push_back({wb, center, w, 0.0f, h});
@@ -278,12 +302,15 @@ void InnBuilder::add_door(const std::string& a, Wall wa, const std::string& b, f
   // The door leaf, open against the wall in room a.
   const glm::vec3 n = wall_normal(wa);
   const glm::vec3 along = glm::vec3(n.z, 0, -n.x);  // along the wall
-  const glm::vec3 hinge = (axis == 0 ? glm::vec3(wa == Wall::kPosX ? ra.max.x : ra.min.x, ra.min.y, center)
-                                     : glm::vec3(center, ra.min.y, wa == Wall::kPosZ ? ra.max.z : ra.min.z)) +
-                          along * (w / 2 + 0.02f);
+  const glm::vec3 hinge =
+      (axis == 0 ? glm::vec3(wa == Wall::kPosX ? ra.max.x : ra.min.x, ra.min.y, center)
+                 : glm::vec3(center, ra.min.y, wa == Wall::kPosZ ? ra.max.z : ra.min.z)) +
+      along * (w / 2 + 0.02f);
   const glm::mat4 m = place(hinge, yaw_facing(along));
-  ra.parts.add(kWoodLight, rbox(detail_, {-0.03f, 0.01f, 0.0f}, {0.03f, h - 0.02f, w - 0.04f}, 0.01f), m);
-  ra.parts.add(kMetal, scenegen::make_sphere(0.03f, 8, 5), m * glm::translate(glm::mat4(1.0f), {0.06f, 1.0f, w - 0.15f}));
+  ra.parts.add(kWoodLight,
+               rbox(detail_, {-0.03f, 0.01f, 0.0f}, {0.03f, h - 0.02f, w - 0.04f}, 0.01f), m);
+  ra.parts.add(kMetal, scenegen::make_sphere(0.03f, 8, 5),
+               m * glm::translate(glm::mat4(1.0f), {0.06f, 1.0f, w - 0.15f}));
 }
 
 void InnBuilder::add_window(const std::string& name, Wall w, float center, bool curtains) {
@@ -313,19 +340,24 @@ void InnBuilder::add_window(const std::string& name, Wall w, float center, bool 
   const glm::vec3 across = axis == 0 ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
   const glm::vec3 through = axis == 0 ? glm::vec3(1, 0, 0) : glm::vec3(0, 0, 1);
   const float bar = 0.03f;
-  r.parts.add(kWoodDark, make_box(mid - across * bar - through * bar - glm::vec3(0, height / 2, 0),
-                                  mid + across * bar + through * bar + glm::vec3(0, height / 2, 0)));
-  r.parts.add(kWoodDark, make_box(mid - across * (width / 2) - through * bar - glm::vec3(0, bar, 0),
-                                  mid + across * (width / 2) + through * bar + glm::vec3(0, bar, 0)));
+  r.parts.add(kWoodDark,
+              make_box(mid - across * bar - through * bar - glm::vec3(0, height / 2, 0),
+                       mid + across * bar + through * bar + glm::vec3(0, height / 2, 0)));
+  r.parts.add(kWoodDark,
+              make_box(mid - across * (width / 2) - through * bar - glm::vec3(0, bar, 0),
+                       mid + across * (width / 2) + through * bar + glm::vec3(0, bar, 0)));
   // Sill.
   const glm::vec3 sill_center = glm::vec3(mid.x, r.min.y + bottom, mid.z) + n * 0.0f;
   const glm::vec3 ext = across * (width / 2 + 0.1f) + glm::vec3(0, 0.04f, 0) + glm::abs(n) * 0.12f;
-  r.parts.add(kWoodDark, rbox(detail_, sill_center - glm::vec3(ext.x, 0.04f, ext.z) + n * 0.12f - glm::vec3(0, 0, 0),
-                              sill_center + glm::vec3(ext.x, 0.0f, ext.z) + n * 0.12f, 0.01f));
+  r.parts.add(
+      kWoodDark,
+      rbox(detail_, sill_center - glm::vec3(ext.x, 0.04f, ext.z) + n * 0.12f - glm::vec3(0, 0, 0),
+           sill_center + glm::vec3(ext.x, 0.0f, ext.z) + n * 0.12f, 0.01f));
   if (curtains) {
     const int cloth = rng_.below(2) == 0 ? kClothRed : kClothGreen;
     for (int side : {-1, 1}) {
-      const glm::vec3 pos = glm::vec3(mid.x, r.min.y, mid.z) + n * 0.03f + across * (static_cast<float>(side) * (width / 2 + 0.3f));
+      const glm::vec3 pos = glm::vec3(mid.x, r.min.y, mid.z) + n * 0.03f +
+                            across * (static_cast<float>(side) * (width / 2 + 0.3f));
       // Curtain local +Z = into the room; local +X = across.
       const glm::mat4 m = place(pos, yaw_facing(n));
       add_curtain(r.parts, detail_, m, 0.55f, 0.5f, bottom + height + 0.25f, cloth);
@@ -346,8 +378,9 @@ void InnBuilder::add_stairs(const std::string& upper, const std::string& lower, 
   const float run = (hole.w - hole.y) / static_cast<float>(steps);
   for (int i = 0; i + 1 < steps; ++i) {
     const float top = up.min.y - rise * static_cast<float>(i + 1);
-    low.parts.add(kWoodDark, rbox(detail_, {hole.x, low.min.y, hole.y + run * static_cast<float>(i)},
-                                  {hole.z, top, hole.y + run * static_cast<float>(i + 1)}, 0.01f));
+    low.parts.add(kWoodDark,
+                  rbox(detail_, {hole.x, low.min.y, hole.y + run * static_cast<float>(i)},
+                       {hole.z, top, hole.y + run * static_cast<float>(i + 1)}, 0.01f));
   }
   // A railing along the open side of the hole in the upper room.
   const Geometry post = scenegen::make_cylinder(0.03f, 0.95f, 8);
@@ -358,8 +391,9 @@ void InnBuilder::add_stairs(const std::string& upper, const std::string& lower, 
                                {hole.z + 0.09f, up.min.y + 1.0f, hole.w + 0.03f}, 0.01f));
 }
 
-void InnBuilder::semi_light(const std::string& name, const std::string& room_name, LightType type, glm::vec3 pos,
-                            glm::vec3 dir, glm::vec3 color, float intensity, float radius, bool on, float range) {
+void InnBuilder::semi_light(const std::string& name, const std::string& room_name, LightType type,
+                            glm::vec3 pos, glm::vec3 dir, glm::vec3 color, float intensity,
+                            float radius, bool on, float range) {
   Light l;
   l.type = type;
   l.color = color;
@@ -376,8 +410,8 @@ void InnBuilder::semi_light(const std::string& name, const std::string& room_nam
   ++stats_.semi_dynamic_lights;
 }
 
-void InnBuilder::static_light(const std::string& name, LightType type, glm::vec3 pos, glm::vec3 dir, glm::vec3 color,
-                              float intensity, float outer) {
+void InnBuilder::static_light(const std::string& name, LightType type, glm::vec3 pos, glm::vec3 dir,
+                              glm::vec3 color, float intensity, float outer) {
   Light l;
   l.type = type;
   l.color = color;
@@ -390,22 +424,25 @@ void InnBuilder::static_light(const std::string& name, LightType type, glm::vec3
   ++stats_.static_lights;
 }
 
-void InnBuilder::candle(const std::string& name, const std::string& room_name, glm::vec3 pos, float height, bool on) {
+void InnBuilder::candle(const std::string& name, const std::string& room_name, glm::vec3 pos,
+                        float height, bool on) {
   Room& r = room(room_name);
   const glm::vec3 flame = add_candle(r.parts, detail_, place(pos, 0.0f), height) + pos;
-  semi_light(name, room_name, LightType::kPoint, flame, {0, -1, 0}, {1.0f, 0.72f, 0.4f}, 1.5f, 0.015f, on, 8.0f);
+  semi_light(name, room_name, LightType::kPoint, flame, {0, -1, 0}, {1.0f, 0.72f, 0.4f}, 1.5f,
+             0.015f, on, 8.0f);
 }
 
-void InnBuilder::torch(const std::string& name, const std::string& room_name, glm::vec3 pos_on_wall, glm::vec3 facing,
-                       bool on) {
+void InnBuilder::torch(const std::string& name, const std::string& room_name, glm::vec3 pos_on_wall,
+                       glm::vec3 facing, bool on) {
   Room& r = room(room_name);
   const glm::mat4 m = place(pos_on_wall, yaw_facing(facing));
   const glm::vec3 flame = glm::vec3(m * glm::vec4(add_torch(r.parts, detail_, m), 1.0f));
-  semi_light(name, room_name, LightType::kPoint, flame, {0, -1, 0}, {1.0f, 0.6f, 0.3f}, 6.0f, 0.05f, on, 12.0f);
+  semi_light(name, room_name, LightType::kPoint, flame, {0, -1, 0}, {1.0f, 0.6f, 0.3f}, 6.0f, 0.05f,
+             on, 12.0f);
 }
 
-void InnBuilder::object(const std::string& name, const std::string& room_name, const Parts& parts, glm::vec3 pos,
-                        float yaw) {
+void InnBuilder::object(const std::string& name, const std::string& room_name, const Parts& parts,
+                        glm::vec3 pos, float yaw) {
   Parts local;
   local.append(parts, glm::rotate(glm::mat4(1.0f), yaw, glm::vec3(0, 1, 0)));
   const int mesh = scene_.add_mesh(name, local.primitives());
@@ -425,7 +462,8 @@ void InnBuilder::item(int which, const std::string& room_name, glm::vec3 pos, fl
   object(name, room_name, parts, pos, yaw);
   // Its baked copy at its place on the altar, hidden until the player puts it there.
   const int slot = static_cast<int>(placed_.size());
-  const glm::vec3 placed = altar_ + glm::vec3(0.0f, 0.0f, (static_cast<float>(slot) - 2.5f) * 0.45f);
+  const glm::vec3 placed =
+      altar_ + glm::vec3(0.0f, 0.0f, (static_cast<float>(slot) - 2.5f) * 0.45f);
   object("placed_" + name, altar_room_, parts, placed, 0.0f);
   state_objects_["placed_" + name] = Json{{"visible", false}};
   items_.push_back(name);
@@ -447,19 +485,24 @@ void InnBuilder::dining_props(Room& r, int tables, bool full) {
       add_table(r.parts, detail_, place(pos, 0.0f), 1.6f, 0.9f, 0.76f);
       for (int side : {-1, 1}) {
         for (int k : {-1, 1}) {
-          const glm::vec3 cp = pos + glm::vec3(0.4f * static_cast<float>(k), 0, 0.62f * static_cast<float>(side));
+          const glm::vec3 cp =
+              pos + glm::vec3(0.4f * static_cast<float>(k), 0, 0.62f * static_cast<float>(side));
           add_chair(r.parts, detail_, place(cp, side > 0 ? kPi : 0.0f));
-          add_place_setting(r.parts, detail_, place(pos + glm::vec3(0.4f * static_cast<float>(k), 0.76f, 0.25f * static_cast<float>(side)),
-                                                    side > 0 ? 0.0f : kPi));
+          add_place_setting(r.parts, detail_,
+                            place(pos + glm::vec3(0.4f * static_cast<float>(k), 0.76f,
+                                                  0.25f * static_cast<float>(side)),
+                                  side > 0 ? 0.0f : kPi));
         }
       }
       add_bowl(r.parts, detail_, place(pos + glm::vec3(-0.25f, 0.76f, 0.0f), 0.0f));
-      if (full) add_carpet(r.parts, detail_, place(pos, 0.0f), 2.6f, 1.9f, t % 2 ? kClothRed : kClothBlue);
+      if (full)
+        add_carpet(r.parts, detail_, place(pos, 0.0f), 2.6f, 1.9f, t % 2 ? kClothRed : kClothBlue);
     }
   }
 }
 
-void InnBuilder::scenario_step(const std::string& name, const std::string& action, const std::string& node, Json state) {
+void InnBuilder::scenario_step(const std::string& name, const std::string& action,
+                               const std::string& node, Json state) {
   Json s;
   s["name"] = name;
   s["action"] = action;
@@ -494,16 +537,20 @@ void InnBuilder::small_layout() {
   const Fireplace f = add_fireplace(living.parts, detail_, fm, 2.0f, 3.0f);
   const glm::vec3 fire = glm::vec3(fm * glm::vec4(f.fire, 1));
   main_fire_ = "fire_main";
-  semi_light(main_fire_, "living_main", LightType::kSpot, fire, {-1, -0.15f, 0}, {1.0f, 0.55f, 0.25f}, 20.0f, 0.25f, false, 14.0f);
-  static_light("ember_main", LightType::kPoint, glm::vec3(fm * glm::vec4(f.ember, 1)), {0, -1, 0}, {1.0f, 0.35f, 0.1f}, 0.6f);
+  semi_light(main_fire_, "living_main", LightType::kSpot, fire, {-1, -0.15f, 0},
+             {1.0f, 0.55f, 0.25f}, 20.0f, 0.25f, false, 14.0f);
+  static_light("ember_main", LightType::kPoint, glm::vec3(fm * glm::vec4(f.ember, 1)), {0, -1, 0},
+               {1.0f, 0.35f, 0.1f}, 0.6f);
   add_carpet(living.parts, detail_, place({8.6f, 0, 2.5f}, 0.0f), 2.0f, 1.5f, kClothRed);
   living.parts.add(kStone, rbox(detail_, {9.2f, 0.0f, 1.1f}, {9.8f, 0.35f, 3.9f}, 0.02f));
   altar_ = {9.5f, 0.35f, 2.5f};
   altar_room_ = "living_main";
   candle("candle_dining_0", "dining", {3.65f, 0.76f, 2.5f}, 0.12f, false);
   torch("torch_dining_0", "dining", {0.0f, 1.9f, 2.5f}, {1, 0, 0}, false);
-  candle("candle_mantel_0", "living_main", glm::vec3(fm * glm::vec4(0.6f, f.mantel_top, 0.62f, 1)), 0.15f, false);
-  static_light("moon", LightType::kDirectional, {3, 6, -4}, {0.25f, -0.55f, 1.0f}, {0.55f, 0.65f, 1.0f}, 2.0f);
+  candle("candle_mantel_0", "living_main", glm::vec3(fm * glm::vec4(0.6f, f.mantel_top, 0.62f, 1)),
+         0.15f, false);
+  static_light("moon", LightType::kDirectional, {3, 6, -4}, {0.25f, -0.55f, 1.0f},
+               {0.55f, 0.65f, 1.0f}, 2.0f);
   // Spell book on a small shelf, two items.
   glm::vec3 slot;
   const glm::mat4 sm = place({1.5f, 0, 5.0f}, kPi);
@@ -520,9 +567,14 @@ void InnBuilder::full_layout() {
   rooms_.push_back({.name = "bedroom_1", .min = {0, 0, 10.25f}, .max = {5.5f, 3, 15}});
   rooms_.push_back({.name = "bedroom_2", .min = {5.75f, 0, 10.25f}, .max = {11, 3, 15}});
   rooms_.push_back({.name = "living_small", .min = {11.25f, 0, 10.25f}, .max = {17, 3, 15}});
-  rooms_.push_back({.name = "bath", .min = {17.25f, 0, 8.25f}, .max = {22, 3, 15}, .floor_material = kStone});
-  rooms_.push_back({.name = "cellar", .min = {0, -2.8f, 0}, .max = {6, -0.3f, 6}, .floor_material = kStone,
-                    .wall_material = kStone, .beams = false});
+  rooms_.push_back(
+      {.name = "bath", .min = {17.25f, 0, 8.25f}, .max = {22, 3, 15}, .floor_material = kStone});
+  rooms_.push_back({.name = "cellar",
+                    .min = {0, -2.8f, 0},
+                    .max = {6, -0.3f, 6},
+                    .floor_material = kStone,
+                    .wall_material = kStone,
+                    .beams = false});
 
   add_door("dining", Wall::kPosX, "living_main", 6.6f);
   add_door("dining", Wall::kPosZ, "corridor", 5.0f);
@@ -540,10 +592,14 @@ void InnBuilder::full_layout() {
   add_stairs("dining", "cellar", {0.25f, 1.0f, 1.25f, 5.0f});
 
   // Static lights: moonlight through the windows, embers in the hearths.
-  static_light("moon", LightType::kDirectional, {8, 8, -6}, {0.25f, -0.55f, 1.0f}, {0.55f, 0.65f, 1.0f}, 2.0f);
-  static_light("moon_window_bedroom_1", LightType::kSpot, {2.75f, 3.2f, 16.5f}, {0, -0.6f, -1}, {0.55f, 0.65f, 1.0f}, 3.0f, 0.5f);
-  static_light("moon_window_bedroom_2", LightType::kSpot, {8.4f, 3.2f, 16.5f}, {0, -0.6f, -1}, {0.55f, 0.65f, 1.0f}, 3.0f, 0.5f);
-  static_light("moon_window_bath", LightType::kSpot, {23.5f, 3.2f, 11.6f}, {-1, -0.6f, 0}, {0.55f, 0.65f, 1.0f}, 3.0f, 0.5f);
+  static_light("moon", LightType::kDirectional, {8, 8, -6}, {0.25f, -0.55f, 1.0f},
+               {0.55f, 0.65f, 1.0f}, 2.0f);
+  static_light("moon_window_bedroom_1", LightType::kSpot, {2.75f, 3.2f, 16.5f}, {0, -0.6f, -1},
+               {0.55f, 0.65f, 1.0f}, 3.0f, 0.5f);
+  static_light("moon_window_bedroom_2", LightType::kSpot, {8.4f, 3.2f, 16.5f}, {0, -0.6f, -1},
+               {0.55f, 0.65f, 1.0f}, 3.0f, 0.5f);
+  static_light("moon_window_bath", LightType::kSpot, {23.5f, 3.2f, 11.6f}, {-1, -0.6f, 0},
+               {0.55f, 0.65f, 1.0f}, 3.0f, 0.5f);
 
   // Dining room: four tables, cupboards, torches, candles.
   Room& dining = room("dining");
@@ -564,11 +620,14 @@ void InnBuilder::full_layout() {
   const glm::mat4 fm = place({17.0f, 0, 4.0f}, -kPi / 2);
   const Fireplace f = add_fireplace(living.parts, detail_, fm, 2.2f, 3.0f);
   main_fire_ = "fire_main";
-  semi_light(main_fire_, "living_main", LightType::kSpot, glm::vec3(fm * glm::vec4(f.fire, 1)), {-1, -0.15f, 0},
-             {1.0f, 0.55f, 0.25f}, 25.0f, 0.3f, false, 16.0f);
-  static_light("ember_main", LightType::kPoint, glm::vec3(fm * glm::vec4(f.ember, 1)), {0, -1, 0}, {1.0f, 0.35f, 0.1f}, 0.8f);
-  candle("candle_mantel_0", "living_main", glm::vec3(fm * glm::vec4(-0.8f, f.mantel_top, 0.62f, 1)), 0.15f, false);
-  candle("candle_mantel_1", "living_main", glm::vec3(fm * glm::vec4(0.8f, f.mantel_top, 0.62f, 1)), 0.15f, false);
+  semi_light(main_fire_, "living_main", LightType::kSpot, glm::vec3(fm * glm::vec4(f.fire, 1)),
+             {-1, -0.15f, 0}, {1.0f, 0.55f, 0.25f}, 25.0f, 0.3f, false, 16.0f);
+  static_light("ember_main", LightType::kPoint, glm::vec3(fm * glm::vec4(f.ember, 1)), {0, -1, 0},
+               {1.0f, 0.35f, 0.1f}, 0.8f);
+  candle("candle_mantel_0", "living_main", glm::vec3(fm * glm::vec4(-0.8f, f.mantel_top, 0.62f, 1)),
+         0.15f, false);
+  candle("candle_mantel_1", "living_main", glm::vec3(fm * glm::vec4(0.8f, f.mantel_top, 0.62f, 1)),
+         0.15f, false);
   living.parts.add(kStone, rbox(detail_, {15.0f, 0.0f, 2.4f}, {15.7f, 0.4f, 5.6f}, 0.03f));
   altar_ = {15.35f, 0.4f, 4.0f};
   altar_room_ = "living_main";
@@ -577,7 +636,8 @@ void InnBuilder::full_layout() {
   add_armchair(living.parts, detail_, place({13.0f, 0, 5.4f}, kPi / 2 + 0.4f), kClothRed);
   add_table(living.parts, detail_, place({12.2f, 0, 4.0f}, kPi / 2), 0.9f, 0.6f, 0.5f);
   add_bookshelf(living.parts, detail_, rng, place({15.4f, 0, 8.0f}, kPi), 2.0f, 2.2f, 5, nullptr);
-  add_bookshelf(living.parts, detail_, rng, place({10.25f, 0, 2.2f}, kPi / 2), 1.8f, 2.2f, 5, nullptr);
+  add_bookshelf(living.parts, detail_, rng, place({10.25f, 0, 2.2f}, kPi / 2), 1.8f, 2.2f, 5,
+                nullptr);
 
   // Corridor: torches (on at the start: the only lit semi-dynamic lights), runner, crates.
   Room& corridor = room("corridor");
@@ -596,9 +656,11 @@ void InnBuilder::full_layout() {
     const bool left = b == 0;
     const float wall_x = left ? r.min.x : r.max.x;
     const float inward = left ? 1.0f : -1.0f;
-    add_bed(r.parts, detail_, place({wall_x, 0, 13.0f}, left ? kPi / 2 : -kPi / 2), b == 0 ? kClothRed : kClothBlue);
+    add_bed(r.parts, detail_, place({wall_x, 0, 13.0f}, left ? kPi / 2 : -kPi / 2),
+            b == 0 ? kClothRed : kClothBlue);
     add_table(r.parts, detail_, place({wall_x + inward * 0.35f, 0, 11.4f}, 0.0f), 0.5f, 0.5f, 0.6f);
-    candle("candle_" + name + "_bedside", name, {wall_x + inward * 0.35f, 0.6f, 11.4f}, 0.1f, false);
+    candle("candle_" + name + "_bedside", name, {wall_x + inward * 0.35f, 0.6f, 11.4f}, 0.1f,
+           false);
     const float tx = left ? 3.9f : 7.4f;
     add_table(r.parts, detail_, place({tx, 0, 14.1f}, 0.0f), 1.2f, 0.7f, 0.76f);
     add_chair(r.parts, detail_, place({tx, 0, 13.45f}, 0.0f));
@@ -607,22 +669,26 @@ void InnBuilder::full_layout() {
     const float shelf_x = left ? r.max.x : r.min.x;
     const glm::mat4 sm = place({shelf_x, 0, 12.4f}, left ? -kPi / 2 : kPi / 2);
     add_bookshelf(r.parts, detail_, rng, sm, 1.8f, 2.2f, 5, b == 0 ? &slot : nullptr);
-    if (b == 0) object("spell_book", name, make_spell_book(detail_), glm::vec3(sm * glm::vec4(slot, 1)), -kPi / 2);
+    if (b == 0)
+      object("spell_book", name, make_spell_book(detail_), glm::vec3(sm * glm::vec4(slot, 1)),
+             -kPi / 2);
     add_barrel(r.parts, detail_, place({left ? 4.9f : 10.4f, 0, 10.85f}, 0.0f));
     add_barrel(r.parts, detail_, place({left ? 4.3f : 9.8f, 0, 10.8f}, 1.0f));
     add_crate(r.parts, detail_, place({left ? 4.9f : 10.4f, 0.8f, 10.85f}, 0.3f), 0.3f);
     add_crate(r.parts, detail_, place({left ? 0.5f : 6.3f, 0, 14.5f}, 0.1f), 0.35f);
     add_crate(r.parts, detail_, place({left ? 0.95f : 6.75f, 0, 14.55f}, -0.2f), 0.25f);
-    add_carpet(r.parts, detail_, place({left ? 2.4f : 8.4f, 0, 12.8f}, 0.0f), 1.6f, 2.2f, b == 0 ? kClothGreen : kClothRed);
+    add_carpet(r.parts, detail_, place({left ? 2.4f : 8.4f, 0, 12.8f}, 0.0f), 1.6f, 2.2f,
+               b == 0 ? kClothGreen : kClothRed);
   }
 
   // Small living room: second fireplace, armchairs, bookshelf.
   Room& ls = room("living_small");
   const glm::mat4 fm2 = place({14.1f, 0, 15.0f}, kPi);
   const Fireplace f2 = add_fireplace(ls.parts, detail_, fm2, 2.0f, 3.0f);
-  semi_light("fire_small", "living_small", LightType::kSpot, glm::vec3(fm2 * glm::vec4(f2.fire, 1)), {0, -0.15f, -1},
-             {1.0f, 0.55f, 0.25f}, 20.0f, 0.25f, false, 14.0f);
-  static_light("ember_small", LightType::kPoint, glm::vec3(fm2 * glm::vec4(f2.ember, 1)), {0, -1, 0}, {1.0f, 0.35f, 0.1f}, 0.6f);
+  semi_light("fire_small", "living_small", LightType::kSpot, glm::vec3(fm2 * glm::vec4(f2.fire, 1)),
+             {0, -0.15f, -1}, {1.0f, 0.55f, 0.25f}, 20.0f, 0.25f, false, 14.0f);
+  static_light("ember_small", LightType::kPoint, glm::vec3(fm2 * glm::vec4(f2.ember, 1)),
+               {0, -1, 0}, {1.0f, 0.35f, 0.1f}, 0.6f);
   add_armchair(ls.parts, detail_, place({13.2f, 0, 12.6f}, 0.3f), kClothBlue);
   add_armchair(ls.parts, detail_, place({15.0f, 0, 12.6f}, -0.3f), kClothGreen);
   add_table(ls.parts, detail_, place({14.1f, 0, 11.4f}, 0.0f), 1.0f, 0.6f, 0.6f);
@@ -643,8 +709,14 @@ void InnBuilder::full_layout() {
 
   // Cellar: barrels, crates, wine racks, a torch.
   Room& cellar = room("cellar");
-  for (int i = 0; i < 5; ++i) add_barrel(cellar.parts, detail_, place({5.6f, -2.8f, 0.5f + 0.6f * static_cast<float>(i)}, 0.3f * static_cast<float>(i)));
-  for (int i = 0; i < 3; ++i) add_barrel(cellar.parts, detail_, place({3.0f + 0.6f * static_cast<float>(i), -2.8f, 0.45f}, 0.5f * static_cast<float>(i)));
+  for (int i = 0; i < 5; ++i)
+    add_barrel(
+        cellar.parts, detail_,
+        place({5.6f, -2.8f, 0.5f + 0.6f * static_cast<float>(i)}, 0.3f * static_cast<float>(i)));
+  for (int i = 0; i < 3; ++i)
+    add_barrel(
+        cellar.parts, detail_,
+        place({3.0f + 0.6f * static_cast<float>(i), -2.8f, 0.45f}, 0.5f * static_cast<float>(i)));
   add_wine_rack(cellar.parts, detail_, rng, place({3.6f, -2.8f, 6.0f}, kPi), 2.0f, 1.8f);
   add_wine_rack(cellar.parts, detail_, rng, place({5.3f, -2.8f, 6.0f}, kPi), 1.2f, 1.8f);
   add_crate(cellar.parts, detail_, place({3.0f, -2.8f, 3.0f}, 0.2f), 0.6f);
@@ -662,8 +734,10 @@ void InnBuilder::full_layout() {
 
 Inn InnBuilder::build() {
   add_materials();
-  if (options_.scale == InnScale::kSmall) small_layout();
-  else full_layout();
+  if (options_.scale == InnScale::kSmall)
+    small_layout();
+  else
+    full_layout();
   for (Room& r : rooms_) build_shell(r);
   for (Room& r : rooms_) {
     const int mesh = scene_.add_mesh("room_" + r.name, r.parts.primitives());
@@ -677,15 +751,21 @@ Inn InnBuilder::build() {
   // items, the spell completes (the main fire flares up violet).
   scenario_step("dark_inn", "start", "", Json::object());
   for (const std::string& l : semi_lights_) {
-    if (state_lights_.contains(l)) scenario_step("light_" + l, "light", l, Json{{"lights", {{l, {{"on", true}}}}}});
+    if (state_lights_.contains(l))
+      scenario_step("light_" + l, "light", l, Json{{"lights", {{l, {{"on", true}}}}}});
   }
-  scenario_step("take_spell_book", "take", "spell_book", Json{{"objects", {{"spell_book", {{"visible", false}}}}}});
+  scenario_step("take_spell_book", "take", "spell_book",
+                Json{{"objects", {{"spell_book", {{"visible", false}}}}}});
   for (std::size_t i = 0; i < items_.size(); ++i) {
-    scenario_step("take_" + items_[i], "take", items_[i], Json{{"objects", {{items_[i], {{"visible", false}}}}}});
-    scenario_step("place_" + items_[i], "place", placed_[i], Json{{"objects", {{placed_[i], {{"visible", true}}}}}});
+    scenario_step("take_" + items_[i], "take", items_[i],
+                  Json{{"objects", {{items_[i], {{"visible", false}}}}}});
+    scenario_step("place_" + items_[i], "place", placed_[i],
+                  Json{{"objects", {{placed_[i], {{"visible", true}}}}}});
   }
-  scenario_step("spell_done", "spell_done", main_fire_,
-                Json{{"lights", {{main_fire_, {{"on", true}, {"color", {0.7, 0.3, 1.0}}, {"intensity", 60.0}}}}}});
+  scenario_step(
+      "spell_done", "spell_done", main_fire_,
+      Json{{"lights",
+            {{main_fire_, {{"on", true}, {"color", {0.7, 0.3, 1.0}}, {"intensity", 60.0}}}}}});
 
   Inn inn{std::move(scene_), Json::object(), Json::object(), stats_};
   inn.state["lights"] = state_lights_;
@@ -722,10 +802,16 @@ void write_text(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-Inn generate_inn(const InnOptions& options) { return InnBuilder(options).build(); }
+Inn generate_inn(const InnOptions& options) {
+  return InnBuilder(options).build();
+}
 
-std::string state_path_for(const std::string& scene_path) { return sidecar(scene_path, ".state.json"); }
-std::string scenario_path_for(const std::string& scene_path) { return sidecar(scene_path, ".scenario.json"); }
+std::string state_path_for(const std::string& scene_path) {
+  return sidecar(scene_path, ".state.json");
+}
+std::string scenario_path_for(const std::string& scene_path) {
+  return sidecar(scene_path, ".scenario.json");
+}
 
 void write_inn(const Inn& inn, const std::string& path, bool draco) {
   scenegen::WriteOptions options;

@@ -25,12 +25,15 @@ constexpr uint32_t kW = 'w', kA = 'a', kS = 's', kD = 'd', kUse = 'e';
 void spawn(const nlohmann::json& scenario, Player* player) {
   for (const auto& st : scenario.at("steps")) {
     if (st.contains("camera") && st.contains("focus")) {
-      player->place(glm::vec3(st["camera"][0].get<float>(), st["camera"][1].get<float>(), st["camera"][2].get<float>()),
-                    glm::vec3(st["focus"][0].get<float>(), st["focus"][1].get<float>(), st["focus"][2].get<float>()));
+      player->place(glm::vec3(st["camera"][0].get<float>(), st["camera"][1].get<float>(),
+                              st["camera"][2].get<float>()),
+                    glm::vec3(st["focus"][0].get<float>(), st["focus"][1].get<float>(),
+                              st["focus"][2].get<float>()));
       return;
     }
   }
-  player->place(glm::vec3(1.0f, Player::kEyeHeight, 1.0f), glm::vec3(2.0f, Player::kEyeHeight, 2.0f));
+  player->place(glm::vec3(1.0f, Player::kEyeHeight, 1.0f),
+                glm::vec3(2.0f, Player::kEyeHeight, 2.0f));
 }
 
 }  // namespace
@@ -80,8 +83,11 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
           width = e.x;
           height = e.y;
           break;
-        case platform::InputEvent::kClose: quit = true; break;
-        case platform::InputEvent::kNone: break;
+        case platform::InputEvent::kClose:
+          quit = true;
+          break;
+        case platform::InputEvent::kNone:
+          break;
       }
     }
     if (quit) break;
@@ -91,10 +97,12 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     const double time_s = platform::elapsed_ms(start, now) * 1e-3;
     input.forward = (keys[kW] ? 1.0f : 0.0f) - (keys[kS] ? 1.0f : 0.0f);
     input.right = (keys[kD] ? 1.0f : 0.0f) - (keys[kA] ? 1.0f : 0.0f);
-    input.turn += ((keys[platform::kKeyLeft] ? 1.0f : 0.0f) - (keys[platform::kKeyRight] ? 1.0f : 0.0f)) *
-                  kKeyTurnRadiansPerSecond * dt;
-    input.look += ((keys[platform::kKeyUp] ? 1.0f : 0.0f) - (keys[platform::kKeyDown] ? 1.0f : 0.0f)) *
-                  kKeyTurnRadiansPerSecond * dt;
+    input.turn +=
+        ((keys[platform::kKeyLeft] ? 1.0f : 0.0f) - (keys[platform::kKeyRight] ? 1.0f : 0.0f)) *
+        kKeyTurnRadiansPerSecond * dt;
+    input.look +=
+        ((keys[platform::kKeyUp] ? 1.0f : 0.0f) - (keys[platform::kKeyDown] ? 1.0f : 0.0f)) *
+        kKeyTurnRadiansPerSecond * dt;
     input.run = keys[platform::kKeyShift];
     player.update(dt, input, *s.grid);
     if (use) {
@@ -117,8 +125,10 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     game.flame_glow(flames.data());
     game.shown_objects(visible.data());
     SceneRenderer::Frame f;
-    const float aspect = static_cast<float>(std::max(width, 1)) / static_cast<float>(std::max(height, 1));
-    f.view_projection = glm::perspective(glm::radians(70.0f), aspect, 0.05f, 100.0f) * player.view();
+    const float aspect =
+        static_cast<float>(std::max(width, 1)) / static_cast<float>(std::max(height, 1));
+    f.view_projection =
+        glm::perspective(glm::radians(70.0f), aspect, 0.05f, 100.0f) * player.view();
     f.light_map = rt.light_map_texture();
     f.object_visible = visible.data();
     f.flame = flames.data();
@@ -132,9 +142,11 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     recompose_ms_smoothed = 0.9 * recompose_ms_smoothed + 0.1 * platform::elapsed_ms(r0, r1);
     const InnGame::Target target = game.target(player.eye(), player.forward());
     char stats[200];
-    std::snprintf(stats, sizeof stats, "%.1f ms/frame (update %.2f ms CPU), %llu texels recomposed, %u pending%s",
-                  frame_ms_smoothed, recompose_ms_smoothed, static_cast<unsigned long long>(st.texels),
-                  st.pending_changes, st.rebuild_active ? ", rebuilding" : "");
+    std::snprintf(stats, sizeof stats,
+                  "%.1f ms/frame (update %.2f ms CPU), %llu texels recomposed, %u pending%s",
+                  frame_ms_smoothed, recompose_ms_smoothed,
+                  static_cast<unsigned long long>(st.texels), st.pending_changes,
+                  st.rebuild_active ? ", rebuilding" : "");
     std::string text = game.objective();
     if (target.kind != InnGame::Target::kNone) text += "\n[E] " + target.label;
     if (time_s < message_until) text += "\n" + message;

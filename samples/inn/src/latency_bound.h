@@ -23,7 +23,7 @@ uint32_t rebuild_frames_bound(const PackView& pack, uint64_t texels, uint64_t bu
 
 // Bound for a change of `light` (or `object`, when light < 0) made now, before the next
 // update(budget).
-uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint64_t budget, int32_t light,
-                              int32_t object);
+uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint64_t budget,
+                              int32_t light, int32_t object);
 
 }  // namespace lightpatch::inn

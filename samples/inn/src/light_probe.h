@@ -28,8 +28,9 @@ class LightProbe {
 
   // Light-map texels (x, y from the top-left) of the surfaces that rays from `position` hit
   // between `min_distance` and `max_distance` metres away, front faces only.
-  static std::vector<glm::ivec2> texels_around(const World& world, glm::vec3 position, uint32_t map_width,
-                                               uint32_t map_height, float min_distance, float max_distance);
+  static std::vector<glm::ivec2> texels_around(const World& world, glm::vec3 position,
+                                               uint32_t map_width, uint32_t map_height,
+                                               float min_distance, float max_distance);
 
   // Mean luminance (irradiance units) of `texels` in the runtime's light map; -1 if empty or
   // the map cannot be read.

@@ -15,18 +15,22 @@ namespace {
 
 int usage() {
   std::fprintf(stderr,
-               "usage: lightpatch-inn generate -o OUT.glb|OUT.gltf [--draco] [--scale full|small] [--seed N]\n"
+               "usage: lightpatch-inn generate -o OUT.glb|OUT.gltf [--draco] [--scale full|small] "
+               "[--seed N]\n"
                "  writes the inn scene and, beside it, OUT.state.json (initial scene state) and\n"
                "  OUT.scenario.json (the scripted scenario)\n"
-               "       lightpatch-inn play [--scene inn.glb --pack inn.lpk] [--headless --script default --out DIR]\n"
-               "  plays a generated inn from its cooked pack (lightpatch-inn play --help for the options)\n");
+               "       lightpatch-inn play [--scene inn.glb --pack inn.lpk] [--headless --script "
+               "default --out DIR]\n"
+               "  plays a generated inn from its cooked pack (lightpatch-inn play --help for the "
+               "options)\n");
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc >= 2 && std::string(argv[1]) == "play") return lightpatch::inn::play_command(argc - 1, argv + 1);
+  if (argc >= 2 && std::string(argv[1]) == "play")
+    return lightpatch::inn::play_command(argc - 1, argv + 1);
   if (argc < 2 || std::string(argv[1]) != "generate") return usage();
   std::string out;
   bool draco = false;
@@ -46,10 +50,13 @@ int main(int argc, char** argv) {
       draco = true;
     } else if (a == "--scale") {
       const std::string s = value();
-      if (s == "full") options.scale = lightpatch::inn::InnScale::kFull;
-      else if (s == "small") options.scale = lightpatch::inn::InnScale::kSmall;
+      if (s == "full")
+        options.scale = lightpatch::inn::InnScale::kFull;
+      else if (s == "small")
+        options.scale = lightpatch::inn::InnScale::kSmall;
       else {
-        std::fprintf(stderr, "lightpatch-inn: --scale must be full or small, not '%s'\n", s.c_str());
+        std::fprintf(stderr, "lightpatch-inn: --scale must be full or small, not '%s'\n",
+                     s.c_str());
         return 2;
       }
     } else if (a == "--seed") {
@@ -57,7 +64,8 @@ int main(int argc, char** argv) {
       char* end = nullptr;
       const unsigned long v = std::strtoul(s.c_str(), &end, 10);
       if (s.empty() || *end != '\0' || v > 0xFFFFFFFFul) {
-        std::fprintf(stderr, "lightpatch-inn: --seed must be an integer in [0, 2^32), not '%s'\n", s.c_str());
+        std::fprintf(stderr, "lightpatch-inn: --seed must be an integer in [0, 2^32), not '%s'\n",
+                     s.c_str());
         return 2;
       }
       options.seed = static_cast<std::uint32_t>(v);
@@ -74,10 +82,11 @@ int main(int argc, char** argv) {
     const lightpatch::inn::Inn inn = lightpatch::inn::generate_inn(options);
     lightpatch::inn::write_inn(inn, out, draco);
     const auto size = std::filesystem::file_size(out);
-    std::printf("%s: %zu triangles, %zu semi-dynamic lights, %zu static lights, %zu semi-dynamic objects "
-                "(%zu items), %llu bytes\n",
-                out.c_str(), inn.stats.triangles, inn.stats.semi_dynamic_lights, inn.stats.static_lights,
-                inn.stats.semi_dynamic_objects, inn.stats.items, static_cast<unsigned long long>(size));
+    std::printf(
+        "%s: %zu triangles, %zu semi-dynamic lights, %zu static lights, %zu semi-dynamic objects "
+        "(%zu items), %llu bytes\n",
+        out.c_str(), inn.stats.triangles, inn.stats.semi_dynamic_lights, inn.stats.static_lights,
+        inn.stats.semi_dynamic_objects, inn.stats.items, static_cast<unsigned long long>(size));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lightpatch-inn: %s\n", e.what());
     return 1;

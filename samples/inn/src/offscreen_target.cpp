@@ -46,7 +46,9 @@ bool OffscreenTarget::init(int width, int height) {
   return ok && glGetError() == GL_NO_ERROR;
 }
 
-void OffscreenTarget::bind() const { glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_); }
+void OffscreenTarget::bind() const {
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+}
 
 void OffscreenTarget::read(std::vector<uint8_t>* rgba) const {
   const size_t row = static_cast<size_t>(width_) * 4;

@@ -14,16 +14,19 @@ namespace lightpatch::inn {
 namespace {
 
 int usage() {
-  std::fprintf(stderr,
-               "usage: lightpatch-inn play [--scene inn.glb] [--pack inn.lpk] [--size WxH] [--budget TEXELS]\n"
-               "                           [--exposure F] [--drift-ulps F] [--cpu]\n"
-               "       lightpatch-inn play --headless [--script default|SCENARIO.json] --out DIR [same options]\n"
-               "  defaults: --scene demo-out/inn.glb --pack demo-out/inn.lpk (what ./run demo makes);\n"
-               "  the budget is texels recomposed per frame (default: half the light map's area);\n"
-               "  --drift-ulps is the planner's drift tolerance (default 512).\n"
-               "  Window: W A S D walk, Shift runs, mouse or arrow keys look, E uses, Esc quits.\n"
-               "  Headless: plays the scenario beside the scene, writes screenshots, frames.csv,\n"
-               "  steps.csv and summary.json to DIR; exits 1 if a step fails.\n");
+  std::fprintf(
+      stderr,
+      "usage: lightpatch-inn play [--scene inn.glb] [--pack inn.lpk] [--size WxH] [--budget "
+      "TEXELS]\n"
+      "                           [--exposure F] [--drift-ulps F] [--cpu]\n"
+      "       lightpatch-inn play --headless [--script default|SCENARIO.json] --out DIR [same "
+      "options]\n"
+      "  defaults: --scene demo-out/inn.glb --pack demo-out/inn.lpk (what ./run demo makes);\n"
+      "  the budget is texels recomposed per frame (default: half the light map's area);\n"
+      "  --drift-ulps is the planner's drift tolerance (default 512).\n"
+      "  Window: W A S D walk, Shift runs, mouse or arrow keys look, E uses, Esc quits.\n"
+      "  Headless: plays the scenario beside the scene, writes screenshots, frames.csv,\n"
+      "  steps.csv and summary.json to DIR; exits 1 if a step fails.\n");
   return 2;
 }
 
@@ -70,8 +73,8 @@ int play_command(int argc, char** argv) {
       window = true;
     } else if (a == "--cpu") {
       o.force_cpu = true;
-    } else if (a == "--scene" || a == "--pack" || a == "--script" || a == "--out" || a == "--size" ||
-               a == "--budget" || a == "--exposure" || a == "--drift-ulps") {
+    } else if (a == "--scene" || a == "--pack" || a == "--script" || a == "--out" ||
+               a == "--size" || a == "--budget" || a == "--exposure" || a == "--drift-ulps") {
       if (!(v = value())) return usage();
       const std::string s = v;
       if (a == "--scene") o.scene = s;
@@ -86,17 +89,21 @@ int play_command(int argc, char** argv) {
         char* end = nullptr;
         const unsigned long long b = std::strtoull(v, &end, 10);
         if (s.empty() || *end != '\0' || b == 0) {
-          std::fprintf(stderr, "lightpatch-inn play: --budget wants a positive number of texels, not '%s'\n", v);
+          std::fprintf(
+              stderr, "lightpatch-inn play: --budget wants a positive number of texels, not '%s'\n",
+              v);
           return 2;
         }
         o.budget = b;
       }
       if (a == "--exposure" && !parse_float(s, &o.exposure)) {
-        std::fprintf(stderr, "lightpatch-inn play: --exposure wants a positive number, not '%s'\n", v);
+        std::fprintf(stderr, "lightpatch-inn play: --exposure wants a positive number, not '%s'\n",
+                     v);
         return 2;
       }
       if (a == "--drift-ulps" && !parse_float(s, &o.drift_ulps)) {
-        std::fprintf(stderr, "lightpatch-inn play: --drift-ulps wants a positive number, not '%s'\n", v);
+        std::fprintf(stderr,
+                     "lightpatch-inn play: --drift-ulps wants a positive number, not '%s'\n", v);
         return 2;
       }
     } else {

@@ -8,7 +8,9 @@ namespace {
 
 nlohmann::json read_json(const std::string& path) {
   std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path + " (written by `lightpatch-inn generate` beside the scene)");
+  if (!f)
+    throw std::runtime_error("cannot read " + path +
+                             " (written by `lightpatch-inn generate` beside the scene)");
   try {
     return nlohmann::json::parse(f);
   } catch (const nlohmann::json::exception& e) {
@@ -20,7 +22,9 @@ nlohmann::json read_json(const std::string& path) {
 std::string sidecar(const std::string& scene, const char* suffix) {
   const size_t slash = scene.find_last_of('/');
   const size_t dot = scene.find_last_of('.');
-  const std::string stem = dot != std::string::npos && (slash == std::string::npos || dot > slash) ? scene.substr(0, dot) : scene;
+  const std::string stem = dot != std::string::npos && (slash == std::string::npos || dot > slash)
+                               ? scene.substr(0, dot)
+                               : scene;
   return stem + suffix;
 }
 
@@ -35,13 +39,15 @@ std::unique_ptr<PlaySession> open_session(const PlayOptions& options) {
   if (options.headless) {
     if (!s->context.create_headless(message, sizeof message)) throw std::runtime_error(message);
   } else {
-    if (!s->context.create_window(options.width, options.height, "lightpatch: the inn", message, sizeof message)) {
+    if (!s->context.create_window(options.width, options.height, "lightpatch: the inn", message,
+                                  sizeof message)) {
       throw std::runtime_error(std::string(message) + " (use --headless without a display)");
     }
   }
 
   s->scene = std::make_unique<GltfScene>(options.scene);
-  if (!s->mapping.open(options.pack.c_str(), message, sizeof message)) throw std::runtime_error(message);
+  if (!s->mapping.open(options.pack.c_str(), message, sizeof message))
+    throw std::runtime_error(message);
   Error error;
   if (PackView::open(s->mapping.data(), s->mapping.size(), &s->pack, &error) != Status::kOk) {
     throw std::runtime_error(options.pack + ": " + error.message);
@@ -52,12 +58,14 @@ std::unique_ptr<PlaySession> open_session(const PlayOptions& options) {
   if (s->runtime.open(s->pack, limits, &error) != Status::kOk) {
     throw std::runtime_error(options.pack + ": " + error.message);
   }
-  s->budget = options.budget ? options.budget : static_cast<uint64_t>(s->runtime.width()) * s->runtime.height() / 2;
+  s->budget = options.budget ? options.budget
+                             : static_cast<uint64_t>(s->runtime.width()) * s->runtime.height() / 2;
 
   s->world = build_world(*s->scene, s->pack);
   s->grid = std::make_unique<CollisionGrid>(s->world, 0.1f);
   if (!s->renderer.init(s->world, message, sizeof message)) throw std::runtime_error(message);
-  if (!s->overlay.init(1024, message, sizeof message)) throw std::runtime_error(std::string("text overlay: ") + message);
+  if (!s->overlay.init(1024, message, sizeof message))
+    throw std::runtime_error(std::string("text overlay: ") + message);
   s->game = std::make_unique<InnGame>(s->runtime, s->world, s->scenario);
   s->game->apply_state(s->initial_state);
   return s;

@@ -26,8 +26,8 @@ struct PlayOptions {
   std::string scene = "demo-out/inn.glb";
   std::string pack = "demo-out/inn.lpk";
   bool headless = false;
-  std::string script;  // "default": the scenario beside the scene
-  std::string out;     // headless: output folder
+  std::string script;         // "default": the scenario beside the scene
+  std::string out;            // headless: output folder
   int width = 0, height = 0;  // 0: 1280x720 windowed, 960x540 headless
   // Texels recomposed per frame; 0: half the light map's area (on llvmpipe a full-area frame of
   // recomposition costs about as much as drawing the inn twice).
@@ -38,7 +38,7 @@ struct PlayOptions {
   // of 32 ulps forces a rebuild every frame or two. The real error is far smaller (the scripted
   // run measures it against a rebuild: summary.json "drift"); 512 keeps rebuilds occasional.
   float drift_ulps = 512.0f;
-  bool force_cpu = false;     // the runtime's CPU path (devices without half-float targets)
+  bool force_cpu = false;  // the runtime's CPU path (devices without half-float targets)
 };
 
 struct PlaySession {

@@ -18,10 +18,13 @@ void Player::place(glm::vec3 eye, glm::vec3 target) {
 }
 
 glm::vec3 Player::forward() const {
-  return glm::vec3(-std::sin(yaw_) * std::cos(pitch_), std::sin(pitch_), -std::cos(yaw_) * std::cos(pitch_));
+  return glm::vec3(-std::sin(yaw_) * std::cos(pitch_), std::sin(pitch_),
+                   -std::cos(yaw_) * std::cos(pitch_));
 }
 
-glm::mat4 Player::view() const { return glm::lookAt(eye(), eye() + forward(), glm::vec3(0.0f, 1.0f, 0.0f)); }
+glm::mat4 Player::view() const {
+  return glm::lookAt(eye(), eye() + forward(), glm::vec3(0.0f, 1.0f, 0.0f));
+}
 
 void Player::update(float dt, const PlayerInput& input, const CollisionGrid& grid) {
   yaw_ += input.turn;

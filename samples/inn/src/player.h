@@ -19,7 +19,7 @@ class Player {
  public:
   static constexpr float kEyeHeight = 1.6f;
   static constexpr float kRadius = 0.22f;
-  static constexpr float kStep = 0.35f;   // highest ledge walked up without jumping
+  static constexpr float kStep = 0.35f;  // highest ledge walked up without jumping
   static constexpr float kHeight = 1.75f;
 
   // Places the eye at `eye`, looking towards `target`.

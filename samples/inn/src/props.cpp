@@ -20,12 +20,22 @@ namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
 
-glm::mat4 at(glm::vec3 p) { return glm::translate(glm::mat4(1.0f), p); }
-glm::mat4 scaled(glm::vec3 p, glm::vec3 s) { return glm::scale(at(p), s); }
-glm::mat4 rot_x(float a) { return glm::rotate(glm::mat4(1.0f), a, glm::vec3(1, 0, 0)); }
-glm::mat4 rot_z(float a) { return glm::rotate(glm::mat4(1.0f), a, glm::vec3(0, 0, 1)); }
+glm::mat4 at(glm::vec3 p) {
+  return glm::translate(glm::mat4(1.0f), p);
+}
+glm::mat4 scaled(glm::vec3 p, glm::vec3 s) {
+  return glm::scale(at(p), s);
+}
+glm::mat4 rot_x(float a) {
+  return glm::rotate(glm::mat4(1.0f), a, glm::vec3(1, 0, 0));
+}
+glm::mat4 rot_z(float a) {
+  return glm::rotate(glm::mat4(1.0f), a, glm::vec3(0, 0, 1));
+}
 
-int segs(const Detail& d, int full) { return std::max(6, full * d.round_segments / 16); }
+int segs(const Detail& d, int full) {
+  return std::max(6, full * d.round_segments / 16);
+}
 
 }  // namespace
 
@@ -41,7 +51,9 @@ float Rng::uniform(float lo, float hi) {
   return lo + (hi - lo) * t;
 }
 
-int Rng::below(int n) { return static_cast<int>(next() % static_cast<std::uint64_t>(n)); }
+int Rng::below(int n) {
+  return static_cast<int>(next() % static_cast<std::uint64_t>(n));
+}
 
 void Parts::add(int material, const Geometry& g, const glm::mat4& m) {
   by_material[material].append(g, m);
@@ -94,24 +106,42 @@ void add_chair(Parts& p, const Detail& d, const glm::mat4& m) {
 }
 
 void add_place_setting(Parts& p, const Detail& d, const glm::mat4& m) {
-  const Geometry plate = make_lathe({{0, 0}, {0.07f, 0}, {0.07f, 0}, {0.11f, 0.015f}, {0.12f, 0.02f},
-                                     {0.115f, 0.022f}, {0.06f, 0.008f}, {0, 0.008f}},
+  const Geometry plate = make_lathe({{0, 0},
+                                     {0.07f, 0},
+                                     {0.07f, 0},
+                                     {0.11f, 0.015f},
+                                     {0.12f, 0.02f},
+                                     {0.115f, 0.022f},
+                                     {0.06f, 0.008f},
+                                     {0, 0.008f}},
                                     segs(d, 24));
   p.add(kCeramic, plate, m);
-  const Geometry cup = make_lathe({{0, 0}, {0.035f, 0}, {0.035f, 0}, {0.04f, 0.09f}, {0.036f, 0.09f},
-                                   {0.031f, 0.01f}, {0, 0.01f}},
+  const Geometry cup = make_lathe({{0, 0},
+                                   {0.035f, 0},
+                                   {0.035f, 0},
+                                   {0.04f, 0.09f},
+                                   {0.036f, 0.09f},
+                                   {0.031f, 0.01f},
+                                   {0, 0.01f}},
                                   segs(d, 16));
   p.add(kCeramic, cup, m * at({0.17f, 0, -0.1f}));
   const Geometry blade = rbox(d, {-0.008f, 0, -0.09f}, {0.008f, 0.005f, 0.09f}, 0.002f);
   p.add(kMetal, blade, m * at({-0.15f, 0, 0}));
   p.add(kMetal, blade, m * at({0.15f, 0, 0}));
   p.add(kMetal, blade, m * at({0.18f, 0, 0.02f}));
-  p.add(kMetal, make_sphere(1.0f, segs(d, 8), 4), m * scaled({0.18f, 0.006f, -0.08f}, {0.02f, 0.006f, 0.03f}));
+  p.add(kMetal, make_sphere(1.0f, segs(d, 8), 4),
+        m * scaled({0.18f, 0.006f, -0.08f}, {0.02f, 0.006f, 0.03f}));
 }
 
 void add_bowl(Parts& p, const Detail& d, const glm::mat4& m) {
   p.add(kCeramic,
-        make_lathe({{0, 0}, {0.05f, 0}, {0.05f, 0}, {0.1f, 0.07f}, {0.095f, 0.072f}, {0.045f, 0.01f}, {0, 0.01f}},
+        make_lathe({{0, 0},
+                    {0.05f, 0},
+                    {0.05f, 0},
+                    {0.1f, 0.07f},
+                    {0.095f, 0.072f},
+                    {0.045f, 0.01f},
+                    {0, 0.01f}},
                    segs(d, 24)),
         m);
   // Apples in the bowl.
@@ -124,13 +154,21 @@ void add_bowl(Parts& p, const Detail& d, const glm::mat4& m) {
 
 glm::vec3 add_candle(Parts& p, const Detail& d, const glm::mat4& m, float height) {
   p.add(kMetal,
-        make_lathe({{0, 0}, {0.05f, 0}, {0.05f, 0}, {0.055f, 0.012f}, {0.05f, 0.014f}, {0.02f, 0.006f},
-                    {0.02f, 0.006f}, {0.018f, 0.02f}, {0, 0.02f}},
+        make_lathe({{0, 0},
+                    {0.05f, 0},
+                    {0.05f, 0},
+                    {0.055f, 0.012f},
+                    {0.05f, 0.014f},
+                    {0.02f, 0.006f},
+                    {0.02f, 0.006f},
+                    {0.018f, 0.02f},
+                    {0, 0.02f}},
                    segs(d, 16)),
         m);
   p.add(kWax, make_cylinder(0.018f, height, segs(d, 12), 1), m * at({0, 0.02f, 0}));
   const float top = 0.02f + height;
-  p.add(kFlame, make_sphere(1.0f, segs(d, 8), 4), m * scaled({0, top + 0.02f, 0}, {0.007f, 0.018f, 0.007f}));
+  p.add(kFlame, make_sphere(1.0f, segs(d, 8), 4),
+        m * scaled({0, top + 0.02f, 0}, {0.007f, 0.018f, 0.007f}));
   return {0.0f, top + 0.025f, 0.0f};
 }
 
@@ -142,7 +180,8 @@ glm::vec3 add_torch(Parts& p, const Detail& d, const glm::mat4& m) {
   const glm::mat4 stick = m * local_stick;
   p.add(kWoodDark, make_frustum(0.015f, 0.025f, 0.4f, segs(d, 10)), stick);
   p.add(kMetal, make_torus(0.03f, 0.006f, segs(d, 12), 6), stick * at({0, 0.34f, 0}));
-  p.add(kFlame, make_sphere(1.0f, segs(d, 10), 6), stick * scaled({0, 0.42f, 0}, {0.035f, 0.06f, 0.035f}));
+  p.add(kFlame, make_sphere(1.0f, segs(d, 10), 6),
+        stick * scaled({0, 0.42f, 0}, {0.035f, 0.06f, 0.035f}));
   return glm::vec3(local_stick * glm::vec4(0, 0.45f, 0, 1));
 }
 
@@ -233,15 +272,23 @@ void add_cupboard(Parts& p, const Detail& d, Rng& rng, const glm::mat4& m, float
   p.add(kWoodDark, rbox(d, {-w / 2, 0, 0}, {w / 2, 0.9f, depth}, 0.015f), m);
   for (int i = 0; i < 2; ++i) {
     const float x0 = -w / 2 + 0.05f + static_cast<float>(i) * (w / 2 - 0.05f);
-    p.add(kWoodLight, rbox(d, {x0, 0.08f, depth}, {x0 + w / 2 - 0.1f, 0.82f, depth + 0.02f}, 0.008f), m);
-    p.add(kMetal, make_sphere(0.015f, segs(d, 8), 4), m * at({x0 + (i == 0 ? w / 2 - 0.16f : 0.06f), 0.5f, depth + 0.035f}));
+    p.add(kWoodLight,
+          rbox(d, {x0, 0.08f, depth}, {x0 + w / 2 - 0.1f, 0.82f, depth + 0.02f}, 0.008f), m);
+    p.add(kMetal, make_sphere(0.015f, segs(d, 8), 4),
+          m * at({x0 + (i == 0 ? w / 2 - 0.16f : 0.06f), 0.5f, depth + 0.035f}));
   }
   const float t = 0.03f;
   p.add(kWoodDark, make_box({-w / 2, 0.9f, 0}, {w / 2, h, 0.02f}), m);
   p.add(kWoodDark, rbox(d, {-w / 2, 0.9f, 0}, {-w / 2 + t, h, 0.3f}, 0.005f), m);
   p.add(kWoodDark, rbox(d, {w / 2 - t, 0.9f, 0}, {w / 2, h, 0.3f}, 0.005f), m);
-  const Geometry plate = make_lathe({{0, 0}, {0.07f, 0}, {0.07f, 0}, {0.11f, 0.015f}, {0.12f, 0.02f},
-                                     {0.115f, 0.022f}, {0.06f, 0.008f}, {0, 0.008f}},
+  const Geometry plate = make_lathe({{0, 0},
+                                     {0.07f, 0},
+                                     {0.07f, 0},
+                                     {0.11f, 0.015f},
+                                     {0.12f, 0.02f},
+                                     {0.115f, 0.022f},
+                                     {0.06f, 0.008f},
+                                     {0, 0.008f}},
                                     segs(d, 24));
   for (int s = 0; s < 3; ++s) {
     const float y = 0.9f + 0.04f + static_cast<float>(s) * (h - 0.95f) / 3.0f;
@@ -253,7 +300,8 @@ void add_cupboard(Parts& p, const Detail& d, Rng& rng, const glm::mat4& m, float
       p.add(kCeramic, plate, m * at({x, y + 0.12f, 0.08f}) * rot_x(-1.35f) * at({0, -0.01f, 0}));
     }
   }
-  p.add(kWoodDark, rbox(d, {-w / 2 - 0.02f, h, -0.0f}, {w / 2 + 0.02f, h + 0.05f, 0.34f}, 0.01f), m);
+  p.add(kWoodDark, rbox(d, {-w / 2 - 0.02f, h, -0.0f}, {w / 2 + 0.02f, h + 0.05f, 0.34f}, 0.01f),
+        m);
 }
 
 void add_armchair(Parts& p, const Detail& d, const glm::mat4& m, int cloth_material) {
@@ -290,7 +338,8 @@ void add_curtain(Parts& p, const Detail& d, const glm::mat4& m, float w, float y
     g.normals[i] = glm::normalize(glm::vec3(-amp * k * std::cos(k * u), 0.0f, 1.0f));
   }
   p.add(material, g, m);
-  p.add(kMetal, make_cylinder(0.012f, w + 0.1f, segs(d, 8)), m * at({w / 2 + 0.05f, y1 + 0.03f, 0.04f}) * rot_z(kPi / 2));
+  p.add(kMetal, make_cylinder(0.012f, w + 0.1f, segs(d, 8)),
+        m * at({w / 2 + 0.05f, y1 + 0.03f, 0.04f}) * rot_z(kPi / 2));
 }
 
 Fireplace add_fireplace(Parts& p, const Detail& d, const glm::mat4& m, float w, float ceiling) {
@@ -310,7 +359,10 @@ Fireplace add_fireplace(Parts& p, const Detail& d, const glm::mat4& m, float w, 
         const float b0 = std::max(x, xa);
         const float b1 = std::min(x + bw, xb);
         if (b1 - b0 > 0.04f) {
-          p.add(kBrick, rbox(d, {b0 + gap / 2, y0 + gap / 2, 0}, {b1 - gap / 2, y0 + bh + gap / 2, depth}, 0.01f), m);
+          p.add(kBrick,
+                rbox(d, {b0 + gap / 2, y0 + gap / 2, 0}, {b1 - gap / 2, y0 + bh + gap / 2, depth},
+                     0.01f),
+                m);
         }
         x += bw + gap;
       }
@@ -326,19 +378,28 @@ Fireplace add_fireplace(Parts& p, const Detail& d, const glm::mat4& m, float w, 
   const float lintel_y = std::ceil(opening_h / (bh + gap)) * (bh + gap);  // first lintel row
   // Mortar core behind the bricks (closes the gaps), back of the hearth, hearth slab.
   // The core runs behind the pillars and the lintel only, leaving the hearth opening free.
-  p.add(kStone, make_box({-w / 2 + 0.02f, 0, 0}, {-w / 2 + pillar - 0.02f, lintel_y, depth - 0.02f}), m);
-  p.add(kStone, make_box({w / 2 - pillar + 0.02f, 0, 0}, {w / 2 - 0.02f, lintel_y, depth - 0.02f}), m);
-  p.add(kStone, make_box({-w / 2 + 0.02f, lintel_y + 0.01f, 0}, {w / 2 - 0.02f, wall_top, depth - 0.02f}), m);
+  p.add(kStone,
+        make_box({-w / 2 + 0.02f, 0, 0}, {-w / 2 + pillar - 0.02f, lintel_y, depth - 0.02f}), m);
+  p.add(kStone, make_box({w / 2 - pillar + 0.02f, 0, 0}, {w / 2 - 0.02f, lintel_y, depth - 0.02f}),
+        m);
+  p.add(kStone,
+        make_box({-w / 2 + 0.02f, lintel_y + 0.01f, 0}, {w / 2 - 0.02f, wall_top, depth - 0.02f}),
+        m);
   p.add(kStone, make_box({-w / 2 + pillar, 0.05f, 0}, {w / 2 - pillar, lintel_y, 0.05f}), m);
   p.add(kStone, make_box({-w / 2 + pillar, -0.001f, 0}, {w / 2 - pillar, 0.05f, depth + 0.4f}), m);
   // Mantel and chimney breast.
-  p.add(kWoodDark, rbox(d, {-w / 2 - 0.1f, wall_top, 0}, {w / 2 + 0.1f, wall_top + 0.08f, depth + 0.1f}, 0.015f), m);
-  p.add(kPlaster, make_box({-w / 2 + 0.1f, wall_top + 0.08f, 0}, {w / 2 - 0.1f, ceiling, depth - 0.1f}), m);
+  p.add(
+      kWoodDark,
+      rbox(d, {-w / 2 - 0.1f, wall_top, 0}, {w / 2 + 0.1f, wall_top + 0.08f, depth + 0.1f}, 0.015f),
+      m);
+  p.add(kPlaster,
+        make_box({-w / 2 + 0.1f, wall_top + 0.08f, 0}, {w / 2 - 0.1f, ceiling, depth - 0.1f}), m);
   // Logs.
   const Geometry log = make_cylinder(0.06f, w - 2 * pillar - 0.3f, segs(d, 10));
   for (int i = 0; i < 3; ++i) {
-    const glm::mat4 lm = m * at({-(w - 2 * pillar - 0.3f) / 2, 0.11f + (i == 2 ? 0.1f : 0.0f),
-                                 0.25f + (i == 1 ? 0.14f : 0.0f) + (i == 2 ? 0.07f : 0.0f)}) *
+    const glm::mat4 lm = m *
+                         at({-(w - 2 * pillar - 0.3f) / 2, 0.11f + (i == 2 ? 0.1f : 0.0f),
+                             0.25f + (i == 1 ? 0.14f : 0.0f) + (i == 2 ? 0.07f : 0.0f)}) *
                          rot_z(-kPi / 2);
     p.add(i == 2 ? kWoodDark : kEmber, log, lm);
   }
@@ -348,22 +409,34 @@ Fireplace add_fireplace(Parts& p, const Detail& d, const glm::mat4& m, float w, 
 void add_bathtub(Parts& p, const Detail& d, const glm::mat4& m) {
   const float w = 1.6f, dp = 0.8f, h = 0.62f, t = 0.06f;
   p.add(kWoodLight, make_box({-w / 2 + t, 0, -dp / 2 + t}, {w / 2 - t, 0.45f, dp / 2 - t}), m);
-  p.add(kWater, make_quad({-w / 2 + t, 0.5f, dp / 2 - t}, {w / 2 - t, 0.5f, dp / 2 - t}, {w / 2 - t, 0.5f, -dp / 2 + t},
-                          {-w / 2 + t, 0.5f, -dp / 2 + t}, 4, 2),
+  p.add(kWater,
+        make_quad({-w / 2 + t, 0.5f, dp / 2 - t}, {w / 2 - t, 0.5f, dp / 2 - t},
+                  {w / 2 - t, 0.5f, -dp / 2 + t}, {-w / 2 + t, 0.5f, -dp / 2 + t}, 4, 2),
         m);
   p.add(kWoodLight, rbox(d, {-w / 2, 0, -dp / 2}, {w / 2, h, -dp / 2 + t}, 0.02f), m);
   p.add(kWoodLight, rbox(d, {-w / 2, 0, dp / 2 - t}, {w / 2, h, dp / 2}, 0.02f), m);
   p.add(kWoodLight, rbox(d, {-w / 2, 0, -dp / 2 + t}, {-w / 2 + t, h, dp / 2 - t}, 0.02f), m);
   p.add(kWoodLight, rbox(d, {w / 2 - t, 0, -dp / 2 + t}, {w / 2, h, dp / 2 - t}, 0.02f), m);
   for (float y : {0.1f, 0.5f}) {
-    p.add(kMetal, rbox(d, {-w / 2 - 0.01f, y, -dp / 2 - 0.01f}, {w / 2 + 0.01f, y + 0.03f, -dp / 2}, 0.004f), m);
-    p.add(kMetal, rbox(d, {-w / 2 - 0.01f, y, dp / 2}, {w / 2 + 0.01f, y + 0.03f, dp / 2 + 0.01f}, 0.004f), m);
+    p.add(
+        kMetal,
+        rbox(d, {-w / 2 - 0.01f, y, -dp / 2 - 0.01f}, {w / 2 + 0.01f, y + 0.03f, -dp / 2}, 0.004f),
+        m);
+    p.add(kMetal,
+          rbox(d, {-w / 2 - 0.01f, y, dp / 2}, {w / 2 + 0.01f, y + 0.03f, dp / 2 + 0.01f}, 0.004f),
+          m);
   }
 }
 
 void add_bucket(Parts& p, const Detail& d, const glm::mat4& m) {
   p.add(kWoodLight,
-        make_lathe({{0, 0}, {0.13f, 0}, {0.13f, 0}, {0.16f, 0.3f}, {0.14f, 0.3f}, {0.11f, 0.03f}, {0, 0.03f}},
+        make_lathe({{0, 0},
+                    {0.13f, 0},
+                    {0.13f, 0},
+                    {0.16f, 0.3f},
+                    {0.14f, 0.3f},
+                    {0.11f, 0.03f},
+                    {0, 0.03f}},
                    segs(d, 16)),
         m);
   p.add(kMetal, make_torus(0.148f, 0.006f, segs(d, 16), 4), m * at({0, 0.2f, 0}));
@@ -382,12 +455,14 @@ void add_towel_rack(Parts& p, const Detail& d, const glm::mat4& m) {
   const Geometry post = make_cylinder(0.02f, 1.1f, segs(d, 8));
   p.add(kWoodDark, post, m * at({-0.4f, 0, 0}));
   p.add(kWoodDark, post, m * at({0.4f, 0, 0}));
-  p.add(kWoodDark, make_cylinder(0.015f, 0.8f, segs(d, 8)), m * at({0.4f, 1.0f, 0}) * rot_z(kPi / 2));
+  p.add(kWoodDark, make_cylinder(0.015f, 0.8f, segs(d, 8)),
+        m * at({0.4f, 1.0f, 0}) * rot_z(kPi / 2));
   // A towel draped over the bar: two curtain-like halves.
   Parts towel;
   add_curtain(towel, d, glm::mat4(1.0f), 0.5f, 0.45f, 1.0f, kClothBlue);
   p.add(kClothBlue, towel.by_material[kClothBlue], m * at({0, 0, 0.02f}));
-  p.add(kClothBlue, towel.by_material[kClothBlue], m * glm::rotate(glm::mat4(1.0f), kPi, glm::vec3(0, 1, 0)) * at({0, 0, 0.02f}));
+  p.add(kClothBlue, towel.by_material[kClothBlue],
+        m * glm::rotate(glm::mat4(1.0f), kPi, glm::vec3(0, 1, 0)) * at({0, 0, 0.02f}));
 }
 
 void add_wine_rack(Parts& p, const Detail& d, Rng& rng, const glm::mat4& m, float w, float h) {
@@ -395,13 +470,19 @@ void add_wine_rack(Parts& p, const Detail& d, Rng& rng, const glm::mat4& m, floa
   p.add(kWoodDark, rbox(d, {-w / 2, 0, 0}, {-w / 2 + 0.04f, h, depth}, 0.006f), m);
   p.add(kWoodDark, rbox(d, {w / 2 - 0.04f, 0, 0}, {w / 2, h, depth}, 0.006f), m);
   p.add(kWoodDark, make_box({-w / 2 + 0.04f, 0, 0}, {w / 2 - 0.04f, h, 0.015f}), m);
-  const Geometry bottle = make_lathe({{0, 0}, {0.038f, 0}, {0.038f, 0}, {0.038f, 0.2f}, {0.014f, 0.25f},
-                                      {0.013f, 0.31f}, {0, 0.31f}},
+  const Geometry bottle = make_lathe({{0, 0},
+                                      {0.038f, 0},
+                                      {0.038f, 0},
+                                      {0.038f, 0.2f},
+                                      {0.014f, 0.25f},
+                                      {0.013f, 0.31f},
+                                      {0, 0.31f}},
                                      segs(d, 12));
   const int shelves = 4;
   for (int s = 0; s <= shelves; ++s) {
     const float y = static_cast<float>(s) * (h - 0.03f) / static_cast<float>(shelves);
-    p.add(kWoodDark, rbox(d, {-w / 2 + 0.04f, y, 0.015f}, {w / 2 - 0.04f, y + 0.03f, depth}, 0.005f), m);
+    p.add(kWoodDark,
+          rbox(d, {-w / 2 + 0.04f, y, 0.015f}, {w / 2 - 0.04f, y + 0.03f, depth}, 0.005f), m);
     if (s == shelves) break;
     for (float x = -w / 2 + 0.1f; x < w / 2 - 0.1f; x += 0.09f) {
       if (rng.below(5) == 0) continue;
@@ -419,8 +500,8 @@ Parts make_spell_book(const Detail& d) {
 }
 
 const char* item_name(int which) {
-  static constexpr const char* kNames[kItemCount] = {"herb_bundle",   "silver_chalice", "dragon_scale",
-                                                     "mortar_pestle", "crystal_flask",  "wand"};
+  static constexpr const char* kNames[kItemCount] = {
+      "herb_bundle", "silver_chalice", "dragon_scale", "mortar_pestle", "crystal_flask", "wand"};
   return kNames[which];
 }
 
@@ -432,38 +513,63 @@ Parts make_item(const Detail& d, int which) {
       const Geometry stem = make_cylinder(0.006f, 0.22f, 6, 1);
       for (int i = 0; i < 5; ++i) {
         const float a = 2.0f * kPi * static_cast<float>(i) / 5.0f;
-        p.add(kHerb, stem, at({0, 0.03f + 0.012f * std::sin(a), 0.012f * std::cos(a)}) * rot_z(-kPi / 2) *
-                               at({0, -0.11f, 0}) * rot_x(0.1f * std::cos(a)));
+        p.add(kHerb, stem,
+              at({0, 0.03f + 0.012f * std::sin(a), 0.012f * std::cos(a)}) * rot_z(-kPi / 2) *
+                  at({0, -0.11f, 0}) * rot_x(0.1f * std::cos(a)));
       }
       p.add(kHerb, make_sphere(1.0f, s, 6), scaled({0.1f, 0.04f, 0}, {0.06f, 0.04f, 0.05f}));
       p.add(kClothCream, make_torus(0.02f, 0.004f, s, 4), at({-0.02f, 0.03f, 0}) * rot_z(kPi / 2));
       break;
     }
     case 1:  // silver chalice
-      p.add(kMetal, make_lathe({{0, 0}, {0.045f, 0}, {0.045f, 0}, {0.04f, 0.008f}, {0.008f, 0.03f}, {0.008f, 0.09f},
-                                {0.045f, 0.13f}, {0.05f, 0.18f}, {0.045f, 0.18f}, {0.0f, 0.12f}},
-                               s),
+      p.add(kMetal,
+            make_lathe({{0, 0},
+                        {0.045f, 0},
+                        {0.045f, 0},
+                        {0.04f, 0.008f},
+                        {0.008f, 0.03f},
+                        {0.008f, 0.09f},
+                        {0.045f, 0.13f},
+                        {0.05f, 0.18f},
+                        {0.045f, 0.18f},
+                        {0.0f, 0.12f}},
+                       s),
             glm::mat4(1.0f));
       break;
     case 2:  // dragon scale: a flattened, tilted disc
       p.add(kScale, make_sphere(1.0f, s, 8), scaled({0, 0.02f, 0}, {0.11f, 0.02f, 0.08f}));
       break;
     case 3:  // mortar and pestle
-      p.add(kStone, make_lathe({{0, 0}, {0.07f, 0}, {0.07f, 0}, {0.08f, 0.08f}, {0.065f, 0.085f}, {0.05f, 0.03f},
-                                {0, 0.03f}},
-                               s),
+      p.add(kStone,
+            make_lathe({{0, 0},
+                        {0.07f, 0},
+                        {0.07f, 0},
+                        {0.08f, 0.08f},
+                        {0.065f, 0.085f},
+                        {0.05f, 0.03f},
+                        {0, 0.03f}},
+                       s),
             glm::mat4(1.0f));
-      p.add(kStone, make_frustum(0.012f, 0.02f, 0.16f, s / 2 + 4), at({0.02f, 0.04f, 0}) * rot_z(-0.4f));
+      p.add(kStone, make_frustum(0.012f, 0.02f, 0.16f, s / 2 + 4),
+            at({0.02f, 0.04f, 0}) * rot_z(-0.4f));
       break;
     case 4:  // crystal flask
-      p.add(kGlass, make_lathe({{0, 0}, {0.05f, 0}, {0.05f, 0}, {0.07f, 0.06f}, {0.05f, 0.12f}, {0.018f, 0.15f},
-                                {0.018f, 0.22f}, {0, 0.22f}},
-                               s),
+      p.add(kGlass,
+            make_lathe({{0, 0},
+                        {0.05f, 0},
+                        {0.05f, 0},
+                        {0.07f, 0.06f},
+                        {0.05f, 0.12f},
+                        {0.018f, 0.15f},
+                        {0.018f, 0.22f},
+                        {0, 0.22f}},
+                       s),
             glm::mat4(1.0f));
       p.add(kWoodLight, make_cylinder(0.015f, 0.03f, 8), at({0, 0.22f, 0}));
       break;
     default:  // wand lying on the surface
-      p.add(kWoodDark, make_frustum(0.008f, 0.004f, 0.32f, 8), at({-0.16f, 0.008f, 0}) * rot_z(-kPi / 2));
+      p.add(kWoodDark, make_frustum(0.008f, 0.004f, 0.32f, 8),
+            at({-0.16f, 0.008f, 0}) * rot_z(-kPi / 2));
       p.add(kScale, make_sphere(0.012f, 8, 5), at({0.165f, 0.01f, 0}));
       break;
   }

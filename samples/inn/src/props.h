@@ -14,9 +14,31 @@ namespace lightpatch::inn {
 
 // Materials of the inn (index into the scene's materials, in this order).
 enum Mat : int {
-  kPlaster, kWoodDark, kWoodLight, kWoodFloor, kStone, kBrick, kClothRed, kClothBlue, kClothGreen,
-  kClothCream, kCeramic, kMetal, kWax, kFlame, kEmber, kWater, kGlass, kBookRed, kBookGreen,
-  kBookBlue, kBookBrown, kBookPurple, kHerb, kScale, kMatCount
+  kPlaster,
+  kWoodDark,
+  kWoodLight,
+  kWoodFloor,
+  kStone,
+  kBrick,
+  kClothRed,
+  kClothBlue,
+  kClothGreen,
+  kClothCream,
+  kCeramic,
+  kMetal,
+  kWax,
+  kFlame,
+  kEmber,
+  kWater,
+  kGlass,
+  kBookRed,
+  kBookGreen,
+  kBookBlue,
+  kBookBrown,
+  kBookPurple,
+  kHerb,
+  kScale,
+  kMatCount
 };
 
 // A small deterministic generator (splitmix64): the same seed gives the same inn everywhere.
@@ -75,10 +97,10 @@ void add_carpet(Parts& p, const Detail& d, const glm::mat4& m, float w, float de
 void add_curtain(Parts& p, const Detail& d, const glm::mat4& m, float w, float y0, float y1,
                  int material);
 struct Fireplace {
-  glm::vec3 fire;     // local position of the flames
-  glm::vec3 ember;    // local position of the embers
-  float mantel_top;   // local y of the mantel shelf's top
-  float mantel_front; // local z of the mantel's front edge
+  glm::vec3 fire;      // local position of the flames
+  glm::vec3 ember;     // local position of the embers
+  float mantel_top;    // local y of the mantel shelf's top
+  float mantel_front;  // local z of the mantel's front edge
 };
 // Fireplace against a wall (local z = 0 is the wall), `w` wide, chimney breast up to `ceiling`.
 Fireplace add_fireplace(Parts& p, const Detail& d, const glm::mat4& m, float w, float ceiling);

@@ -12,8 +12,8 @@ glm::vec3 position_of(const World& w, uint32_t index) {
 
 }  // namespace
 
-bool cast_ray(const World& world, const IndexRange& range, glm::vec3 origin, glm::vec3 dir, float max_distance,
-              bool front_only, RayHit* hit) {
+bool cast_ray(const World& world, const IndexRange& range, glm::vec3 origin, glm::vec3 dir,
+              float max_distance, bool front_only, RayHit* hit) {
   bool found = false;
   float best = max_distance;
   for (uint32_t t = range.first; t + 2 < range.first + range.count; t += 3) {

@@ -67,11 +67,13 @@ SceneRenderer::~SceneRenderer() {
 bool SceneRenderer::init(const World& world, char* message, unsigned message_size) {
   world_ = &world;
   if (world.lights.size() > kMaxLights) {
-    std::snprintf(message, message_size, "the scene has %zu semi-dynamic lights; the renderer draws flames of at most %u",
+    std::snprintf(message, message_size,
+                  "the scene has %zu semi-dynamic lights; the renderer draws flames of at most %u",
                   world.lights.size(), kMaxLights);
     return false;
   }
-  const char* const attributes[] = {"a_position", "a_lightmap_uv", "a_albedo", "a_emissive", "a_flame", nullptr};
+  const char* const attributes[] = {"a_position", "a_lightmap_uv", "a_albedo",
+                                    "a_emissive", "a_flame",       nullptr};
   program_ = build_program(kVertexShader, kFragmentShader, attributes, message, message_size);
   if (!program_) return false;
   view_projection_location_ = glGetUniformLocation(program_, "u_view_projection");
@@ -84,10 +86,12 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   glGenBuffers(1, &ibo_);
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vbo_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(world.vertices.size() * sizeof(WorldVertex)),
+  glBufferData(GL_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(world.vertices.size() * sizeof(WorldVertex)),
                world.vertices.data(), GL_STATIC_DRAW);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(world.indices.size() * sizeof(uint32_t)),
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(world.indices.size() * sizeof(uint32_t)),
                world.indices.data(), GL_STATIC_DRAW);
   const GLsizei stride = sizeof(WorldVertex);
   auto at = [](size_t offset) { return reinterpret_cast<const void*>(offset); };
@@ -104,7 +108,8 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   if (glGetError() != GL_NO_ERROR) {
-    std::snprintf(message, message_size, "uploading the scene's geometry failed (out of GPU memory?)");
+    std::snprintf(message, message_size,
+                  "uploading the scene's geometry failed (out of GPU memory?)");
     return false;
   }
   return true;

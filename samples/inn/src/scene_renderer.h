@@ -28,9 +28,9 @@ class SceneRenderer {
 
   struct Frame {
     glm::mat4 view_projection{1.0f};
-    uint32_t light_map = 0;        // RGBA16F irradiance texture (Runtime::light_map_texture())
+    uint32_t light_map = 0;  // RGBA16F irradiance texture (Runtime::light_map_texture())
     const uint8_t* object_visible = nullptr;  // [object count]: draw the object?
-    const float* flame = nullptr;  // [light count]: glow of the light's flame (0 = out)
+    const float* flame = nullptr;             // [light count]: glow of the light's flame (0 = out)
     float exposure = 1.0f;
     int viewport_width = 0, viewport_height = 0;
   };

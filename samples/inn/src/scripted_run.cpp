@@ -54,7 +54,9 @@ float mean(const std::vector<double>& v) {
 nlohmann::json load_steps(const PlaySession& s, const PlayOptions& o) {
   if (o.script == "default") return s.scenario.at("steps");
   std::ifstream f(o.script);
-  if (!f) throw std::runtime_error("--script: cannot read " + o.script + " (use 'default' or a scenario JSON file)");
+  if (!f)
+    throw std::runtime_error("--script: cannot read " + o.script +
+                             " (use 'default' or a scenario JSON file)");
   return nlohmann::json::parse(f).at("steps");
 }
 
@@ -63,8 +65,10 @@ bool step_camera(const nlohmann::json& steps, size_t i, glm::vec3* eye, glm::vec
   auto get = [&](size_t k) {
     const nlohmann::json& st = steps[k];
     if (!st.contains("camera") || !st.contains("focus")) return false;
-    *eye = glm::vec3(st["camera"][0].get<float>(), st["camera"][1].get<float>(), st["camera"][2].get<float>());
-    *focus = glm::vec3(st["focus"][0].get<float>(), st["focus"][1].get<float>(), st["focus"][2].get<float>());
+    *eye = glm::vec3(st["camera"][0].get<float>(), st["camera"][1].get<float>(),
+                     st["camera"][2].get<float>());
+    *focus = glm::vec3(st["focus"][0].get<float>(), st["focus"][1].get<float>(),
+                       st["focus"][2].get<float>());
     return true;
   };
   for (size_t k = i; k < steps.size(); ++k)
@@ -100,12 +104,14 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   const nlohmann::json steps = load_steps(s, o);
   std::filesystem::create_directories(o.out);
   OffscreenTarget target;
-  if (!target.init(o.width, o.height)) throw std::runtime_error("cannot create the offscreen framebuffer");
+  if (!target.init(o.width, o.height))
+    throw std::runtime_error("cannot create the offscreen framebuffer");
   LightProbe probe;
   probe.init();
 
   const glm::mat4 projection =
-      glm::perspective(glm::radians(70.0f), static_cast<float>(o.width) / static_cast<float>(o.height), 0.05f, 100.0f);
+      glm::perspective(glm::radians(70.0f),
+                       static_cast<float>(o.width) / static_cast<float>(o.height), 0.05f, 100.0f);
   glm::mat4 view(1.0f);
   std::vector<float> flames(s.world.lights.size());
   std::vector<uint8_t> visible(s.world.objects.size());
@@ -121,7 +127,8 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     r.frame = ++frame_no;
     r.step = step;
     const uint64_t t0 = platform::monotonic_ns();
-    r.flicker_updates = flicker ? game.animate(static_cast<double>(frame_no) * kFrameSeconds, s.budget) : 0;
+    r.flicker_updates =
+        flicker ? game.animate(static_cast<double>(frame_no) * kFrameSeconds, s.budget) : 0;
     const uint64_t r0 = platform::monotonic_ns();
     const Status status = rt.update(s.budget);
     glFinish();
@@ -143,8 +150,8 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     const uint64_t t1 = platform::monotonic_ns();
     const GLenum gl_error = glGetError();
     if (status != Status::kOk || gl_error != GL_NO_ERROR) {
-      std::fprintf(stderr, "lightpatch-inn: frame %" PRIu64 " (%s): %s, GL error 0x%x\n", frame_no, step.c_str(),
-                   status_name(status), gl_error);
+      std::fprintf(stderr, "lightpatch-inn: frame %" PRIu64 " (%s): %s, GL error 0x%x\n", frame_no,
+                   step.c_str(), status_name(status), gl_error);
       gl_failed = true;
     }
     const FrameStats& st = rt.stats();
@@ -176,11 +183,13 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     uint64_t all = uint64_t(rt.width()) * rt.height();
     for (uint32_t g = 0; g < s.pack.group_count(); ++g) all += rt.planner().group_texels(g);
     r.bound = rebuild_frames_bound(s.pack, all, s.budget);
-    while (!rt.idle() && frame_no + 1 - r.applied_frame < 4ull * r.bound + 100) frame("initial_build", true);
+    while (!rt.idle() && frame_no + 1 - r.applied_frame < 4ull * r.bound + 100)
+      frame("initial_build", true);
     r.landed = rt.idle();
     r.landed_frame = frame_no;
     r.latency = static_cast<uint32_t>(frame_no - r.applied_frame + 1);
-    if (!r.landed || r.latency > r.bound) r.error = "the initial build did not complete within its bound";
+    if (!r.landed || r.latency > r.bound)
+      r.error = "the initial build did not complete within its bound";
     records.push_back(r);
   }
 
@@ -200,14 +209,17 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     bool applied = true;
     if (r.action == "light" || r.action == "spell_done") {
       light = rt.find_light(r.node.c_str());
-      if (light < 0) throw std::runtime_error("step " + r.name + ": the pack has no light '" + r.node + "'");
-      probe_texels = LightProbe::texels_around(s.world, s.world.lights[static_cast<size_t>(light)].position, rt.width(),
-                                               rt.height(), 0.1f, 3.0f);
+      if (light < 0)
+        throw std::runtime_error("step " + r.name + ": the pack has no light '" + r.node + "'");
+      probe_texels =
+          LightProbe::texels_around(s.world, s.world.lights[static_cast<size_t>(light)].position,
+                                    rt.width(), rt.height(), 0.1f, 3.0f);
       r.probe_before = probe.measure(rt, probe_texels);
       r.bound = change_latency_bound(rt, s.pack, s.budget, light, -1);
       if (r.action == "light") {
         bool on = true;
-        if (st.contains("state") && st["state"].contains("lights") && st["state"]["lights"].contains(r.node))
+        if (st.contains("state") && st["state"].contains("lights") &&
+            st["state"]["lights"].contains(r.node))
           on = st["state"]["lights"][r.node].value("on", true);
         applied = game.set_light_on(static_cast<uint32_t>(light), on);
       } else {
@@ -215,7 +227,8 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
       }
     } else if (r.action == "take") {
       object = rt.find_object(r.node.c_str());
-      if (object < 0) throw std::runtime_error("step " + r.name + ": the pack has no object '" + r.node + "'");
+      if (object < 0)
+        throw std::runtime_error("step " + r.name + ": the pack has no object '" + r.node + "'");
       r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object);
       applied = game.take(static_cast<uint32_t>(object));
     } else if (r.action == "place") {
@@ -246,14 +259,16 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           bool same = !ls.contains("on") || ls["on"].get<bool>() == b.on;
           if (ls.contains("intensity")) same = same && ls["intensity"].get<float>() == b.intensity;
           if (ls.contains("color"))
-            for (int c = 0; c < 3; ++c) same = same && ls["color"][static_cast<size_t>(c)].get<float>() == b.color[c];
+            for (int c = 0; c < 3; ++c)
+              same = same && ls["color"][static_cast<size_t>(c)].get<float>() == b.color[c];
           if (!same) r.error = "the game's state of " + name + " differs from the step's";
         }
       }
       if (want.contains("objects")) {
         for (const auto& [name, os] : want["objects"].items()) {
           const int32_t ob = rt.find_object(name.c_str());
-          if (ob < 0 || (os.contains("visible") && os["visible"].get<bool>() != rt.object_visible(static_cast<uint32_t>(ob))))
+          if (ob < 0 || (os.contains("visible") &&
+                         os["visible"].get<bool>() != rt.object_visible(static_cast<uint32_t>(ob))))
             r.error = "the game's state of " + name + " differs from the step's";
         }
       }
@@ -284,8 +299,10 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
         }
       }
       r.latency = r.landed ? static_cast<uint32_t>(r.landed_frame - r.applied_frame + 1) : 0;
-      if (!r.landed) r.error = "the change never landed";
-      else if (r.latency > r.bound) r.error = "landed after its latency bound";
+      if (!r.landed)
+        r.error = "the change never landed";
+      else if (r.latency > r.bound)
+        r.error = "landed after its latency bound";
     }
     for (int k = 0; k < kSettleFrames; ++k) frame(r.name, true);
     if (light >= 0) r.probe_after = probe.measure(rt, probe_texels);
@@ -295,7 +312,8 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     r.screenshot = file;
     std::vector<uint8_t> pixels;
     target.read(&pixels);
-    if (!write_png((std::filesystem::path(o.out) / file).string().c_str(), o.width, o.height, pixels.data())) {
+    if (!write_png((std::filesystem::path(o.out) / file).string().c_str(), o.width, o.height,
+                   pixels.data())) {
       r.error = "cannot write " + r.screenshot;
     }
     records.push_back(r);
@@ -313,7 +331,8 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   caption = "drift check";
   while (!rt.idle() && frame_no < 1000000) frame("drift_settle", false);
   const float error_bound = rt.stats().error_bound;
-  std::vector<float> incremental(static_cast<size_t>(rt.width()) * rt.height() * 4), rebuilt(incremental.size());
+  std::vector<float> incremental(static_cast<size_t>(rt.width()) * rt.height() * 4),
+      rebuilt(incremental.size());
   Error read_error;
   bool drift_read = rt.read_light_map(incremental.data(), &read_error) == Status::kOk;
   rt.request_rebuild();
@@ -328,11 +347,13 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   // Relative to the texel's own value, where that value is not negligible (1% of the maximum).
   for (size_t k = 0; k < rebuilt.size(); ++k) {
     if (k % 4 != 3 && std::fabs(rebuilt[k]) >= 0.01f * map_max) {
-      drift_relative = std::max(drift_relative, std::fabs(incremental[k] - rebuilt[k]) / std::fabs(rebuilt[k]));
+      drift_relative =
+          std::max(drift_relative, std::fabs(incremental[k] - rebuilt[k]) / std::fabs(rebuilt[k]));
     }
   }
   if (!drift_read) {
-    std::fprintf(stderr, "lightpatch-inn: reading the light map back failed: %s\n", read_error.message);
+    std::fprintf(stderr, "lightpatch-inn: reading the light map back failed: %s\n",
+                 read_error.message);
     gl_failed = true;
   }
 
@@ -340,27 +361,31 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   const std::filesystem::path dir(o.out);
   {
     std::ofstream f(dir / "frames.csv");
-    f << "frame,step,total_ms,recompose_ms,render_ms,texels,draws,pending_changes,oldest_pending_frames,"
+    f << "frame,step,total_ms,recompose_ms,render_ms,texels,draws,pending_changes,oldest_pending_"
+         "frames,"
          "completed_changes,max_latency_frames,rebuild_active,presented,flicker_updates\n";
     for (const FrameRecord& r : frames) {
       char row[320];
-      std::snprintf(row, sizeof row, "%" PRIu64 ",%s,%.3f,%.3f,%.3f,%" PRIu64 ",%u,%u,%u,%u,%u,%d,%d,%u\n", r.frame,
-                    r.step.c_str(), r.total_ms, r.recompose_ms, r.render_ms, r.texels, r.draws, r.pending,
-                    r.oldest_pending_frames, r.completed, r.max_latency, r.rebuild_active ? 1 : 0, r.presented ? 1 : 0,
-                    r.flicker_updates);
+      std::snprintf(row, sizeof row,
+                    "%" PRIu64 ",%s,%.3f,%.3f,%.3f,%" PRIu64 ",%u,%u,%u,%u,%u,%d,%d,%u\n", r.frame,
+                    r.step.c_str(), r.total_ms, r.recompose_ms, r.render_ms, r.texels, r.draws,
+                    r.pending, r.oldest_pending_frames, r.completed, r.max_latency,
+                    r.rebuild_active ? 1 : 0, r.presented ? 1 : 0, r.flicker_updates);
       f << row;
     }
   }
   int failures = gl_failed ? 1 : 0;
   {
     std::ofstream f(dir / "steps.csv");
-    f << "step,action,node,applied_frame,landed_frame,latency_frames,bound_frames,landed,probe_before,probe_after,"
+    f << "step,action,node,applied_frame,landed_frame,latency_frames,bound_frames,landed,probe_"
+         "before,probe_after,"
          "screenshot,error\n";
     for (const StepRecord& r : records) {
       char row[512];
-      std::snprintf(row, sizeof row, "%s,%s,%s,%" PRIu64 ",%" PRIu64 ",%u,%u,%d,%.6g,%.6g,%s,%s\n", r.name.c_str(),
-                    r.action.c_str(), r.node.c_str(), r.applied_frame, r.landed_frame, r.latency, r.bound,
-                    r.landed ? 1 : 0, r.probe_before, r.probe_after, r.screenshot.c_str(), r.error.c_str());
+      std::snprintf(row, sizeof row, "%s,%s,%s,%" PRIu64 ",%" PRIu64 ",%u,%u,%d,%.6g,%.6g,%s,%s\n",
+                    r.name.c_str(), r.action.c_str(), r.node.c_str(), r.applied_frame,
+                    r.landed_frame, r.latency, r.bound, r.landed ? 1 : 0, r.probe_before,
+                    r.probe_after, r.screenshot.c_str(), r.error.c_str());
       f << row;
       if (!r.error.empty()) {
         std::fprintf(stderr, "lightpatch-inn: step %s: %s\n", r.name.c_str(), r.error.c_str());
@@ -388,17 +413,21 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   summary["budget_texels"] = s.budget;
   summary["gpu_path"] = rt.gpu_path();
   summary["renderer"] = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  summary["runtime_memory_bytes"] = {{"atlases", m.atlases},           {"light_map", m.light_map},
-                                     {"intermediate", m.intermediate}, {"vertex_buffer", m.vertex_buffer},
-                                     {"index_buffer", m.index_buffer}, {"cpu_fallback", m.cpu_fallback}};
-  summary["game_geometry_bytes"] = s.world.vertices.size() * sizeof(WorldVertex) + s.world.indices.size() * 4;
+  summary["runtime_memory_bytes"] = {
+      {"atlases", m.atlases},           {"light_map", m.light_map},
+      {"intermediate", m.intermediate}, {"vertex_buffer", m.vertex_buffer},
+      {"index_buffer", m.index_buffer}, {"cpu_fallback", m.cpu_fallback}};
+  summary["game_geometry_bytes"] =
+      s.world.vertices.size() * sizeof(WorldVertex) + s.world.indices.size() * 4;
   summary["frames"] = frames.size();
   summary["frame_ms_without_recomposition"] = mean(idle_total);
   summary["frame_ms_with_recomposition"] = mean(busy_total);
   summary["recompose_ms_mean_when_recomposing"] = mean(busy_recompose);
   summary["recompose_ms_mean_flicker_benchmark"] = mean(flicker_recompose);
   summary["texels_mean_when_recomposing"] =
-      busy_recompose.empty() ? 0.0 : static_cast<double>(busy_texels) / static_cast<double>(busy_recompose.size());
+      busy_recompose.empty()
+          ? 0.0
+          : static_cast<double>(busy_texels) / static_cast<double>(busy_recompose.size());
   summary["render_ms_mean"] = mean(render);
   summary["drift"] = {{"planner_error_bound", error_bound},
                       {"max_abs_difference_vs_rebuild", drift_max},
@@ -408,23 +437,31 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   summary["failures"] = failures;
   nlohmann::ordered_json js = nlohmann::ordered_json::array();
   for (const StepRecord& r : records) {
-    js.push_back({{"step", r.name}, {"latency_frames", r.latency}, {"bound_frames", r.bound}, {"landed", r.landed}});
+    js.push_back({{"step", r.name},
+                  {"latency_frames", r.latency},
+                  {"bound_frames", r.bound},
+                  {"landed", r.landed}});
   }
   summary["steps"] = js;
   std::ofstream(dir / "summary.json") << summary.dump(1) << "\n";
 
-  std::printf("%-34s %8s %6s %12s %12s\n", "step", "latency", "bound", "probe before", "probe after");
+  std::printf("%-34s %8s %6s %12s %12s\n", "step", "latency", "bound", "probe before",
+              "probe after");
   for (const StepRecord& r : records) {
-    std::printf("%-34s %8u %6u %12.4g %12.4g%s%s\n", r.name.c_str(), r.latency, r.bound, r.probe_before, r.probe_after,
+    std::printf("%-34s %8u %6u %12.4g %12.4g%s%s\n", r.name.c_str(), r.latency, r.bound,
+                r.probe_before, r.probe_after,
                 r.error.empty() ? "" : "  FAILED: ", r.error.c_str());
   }
-  std::printf("light map %ux%u, budget %" PRIu64 " texels/frame, %zu frames; frame %.2f ms without recomposition, "
+  std::printf("light map %ux%u, budget %" PRIu64
+              " texels/frame, %zu frames; frame %.2f ms without recomposition, "
               "%.2f ms with (recomposition %.2f ms, %.0f texels)\n",
-              rt.width(), rt.height(), s.budget, frames.size(), mean(idle_total), mean(busy_total), mean(busy_recompose),
-              summary["texels_mean_when_recomposing"].get<double>());
-  std::printf("drift after the flicker benchmark: max |incremental - rebuilt| = %.4g (relative %.3g; map max %.4g, "
-              "planner bound %.4g)\n",
-              drift_max, drift_relative, map_max, error_bound);
+              rt.width(), rt.height(), s.budget, frames.size(), mean(idle_total), mean(busy_total),
+              mean(busy_recompose), summary["texels_mean_when_recomposing"].get<double>());
+  std::printf(
+      "drift after the flicker benchmark: max |incremental - rebuilt| = %.4g (relative %.3g; map "
+      "max %.4g, "
+      "planner bound %.4g)\n",
+      drift_max, drift_relative, map_max, error_bound);
   std::printf("output: %s (screenshots, frames.csv, steps.csv, summary.json)\n",
               std::filesystem::absolute(dir).string().c_str());
   return failures ? 1 : 0;

@@ -71,8 +71,8 @@ bool TextOverlay::init(uint32_t max_chars, char* message, unsigned message_size)
   std::vector<uint16_t> indices(static_cast<size_t>(max_quads_) * 6);
   for (uint32_t q = 0; q < max_quads_; ++q) {
     const uint16_t b = static_cast<uint16_t>(q * 4);
-    const uint16_t quad[6] = {b, static_cast<uint16_t>(b + 1), static_cast<uint16_t>(b + 2), b,
-                              static_cast<uint16_t>(b + 2), static_cast<uint16_t>(b + 3)};
+    const uint16_t quad[6] = {b, static_cast<uint16_t>(b + 1), static_cast<uint16_t>(b + 2),
+                              b, static_cast<uint16_t>(b + 2), static_cast<uint16_t>(b + 3)};
     std::memcpy(&indices[static_cast<size_t>(q) * 6], quad, sizeof quad);
   }
   glGenVertexArrays(1, &vao_);
@@ -80,14 +80,16 @@ bool TextOverlay::init(uint32_t max_chars, char* message, unsigned message_size)
   glGenBuffers(1, &ibo_);
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vbo_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices_.size()), nullptr, GL_DYNAMIC_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices_.size()), nullptr,
+               GL_DYNAMIC_DRAW);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint16_t)), indices.data(),
-               GL_STATIC_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint16_t)),
+               indices.data(), GL_STATIC_DRAW);
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, kVertexBytes, nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, kVertexBytes, reinterpret_cast<const void*>(12));
+  glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, kVertexBytes,
+                        reinterpret_cast<const void*>(12));
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   stb_easy_font_spacing(0.0f);
@@ -131,7 +133,8 @@ void TextOverlay::draw(const char* text, int x, int y, float scale, int width, i
   put_quad(vertices_.data(), -4.0f, -4.0f, w + 4.0f, h + 1.0f, panel);
   unsigned char white[4] = {235, 225, 200, 255};
   const int room = static_cast<int>(vertices_.size()) - static_cast<int>(4 * kVertexBytes);
-  const int quads = 1 + stb_easy_font_print(0.0f, 0.0f, text_.data(), white, vertices_.data() + 4 * kVertexBytes, room);
+  const int quads = 1 + stb_easy_font_print(0.0f, 0.0f, text_.data(), white,
+                                            vertices_.data() + 4 * kVertexBytes, room);
 
   glViewport(0, 0, width, height);
   glDisable(GL_DEPTH_TEST);
@@ -140,12 +143,15 @@ void TextOverlay::draw(const char* text, int x, int y, float scale, int width, i
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
   glUseProgram(program_);
   // Font pixels -> clip space, origin at the text's top-left corner, y down.
-  const float sx = 2.0f * scale / static_cast<float>(width), sy = -2.0f * scale / static_cast<float>(height);
-  glUniform4f(transform_location_, sx, sy, -1.0f + 2.0f * static_cast<float>(x) / static_cast<float>(width),
+  const float sx = 2.0f * scale / static_cast<float>(width),
+              sy = -2.0f * scale / static_cast<float>(height);
+  glUniform4f(transform_location_, sx, sy,
+              -1.0f + 2.0f * static_cast<float>(x) / static_cast<float>(width),
               1.0f - 2.0f * static_cast<float>(y) / static_cast<float>(height));
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vbo_);
-  glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(quads) * 4 * kVertexBytes, vertices_.data());
+  glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(quads) * 4 * kVertexBytes,
+                  vertices_.data());
   glDrawElements(GL_TRIANGLES, quads * 6, GL_UNSIGNED_SHORT, nullptr);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glBindVertexArray(0);

@@ -17,7 +17,9 @@ LightKind kind_of(const std::string& name) {
   return LightKind::kOther;
 }
 
-uint8_t unorm8(float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
+uint8_t unorm8(float v) {
+  return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+}
 
 // A flame mesh belongs to the semi-dynamic light closest to it (the generator puts each light at
 // its flame's centre); emissive surfaces farther than this from every such light are static
@@ -26,11 +28,14 @@ constexpr float kFlameReach = 0.35f;
 
 }  // namespace
 
-std::string to_string(const Name& name) { return std::string(name.data, name.length); }
+std::string to_string(const Name& name) {
+  return std::string(name.data, name.length);
+}
 
 World build_world(const GltfScene& scene, const PackView& pack) {
   if (pack.mesh_count() == 0) {
-    throw std::runtime_error("the pack has no light-map UVs of its meshes (kMeshes section); cook it again");
+    throw std::runtime_error(
+        "the pack has no light-map UVs of its meshes (kMeshes section); cook it again");
   }
   World w;
   // Lights: the pack's order, positions from the glTF nodes of the same name.
@@ -47,10 +52,12 @@ World build_world(const GltfScene& scene, const PackView& pack) {
         break;
       }
     }
-    if (!found) throw std::runtime_error("pack light '" + wl.name + "' is not a light of the scene");
+    if (!found)
+      throw std::runtime_error("pack light '" + wl.name + "' is not a light of the scene");
   }
   w.objects.resize(pack.object_count());
-  for (uint32_t o = 0; o < pack.object_count(); ++o) w.objects[o].name = to_string(pack.object_name(o));
+  for (uint32_t o = 0; o < pack.object_count(); ++o)
+    w.objects[o].name = to_string(pack.object_name(o));
 
   // Vertices of every baked primitive; triangles sorted into static, then object by object.
   std::vector<std::vector<uint32_t>> object_indices(pack.object_count());
@@ -60,14 +67,17 @@ World build_world(const GltfScene& scene, const PackView& pack) {
     const int node = static_cast<int>(mr.node_index);
     const int prim = static_cast<int>(mr.primitive);
     if (mr.node_index >= scene.nodes().size() || prim >= scene.primitive_count(node)) {
-      throw std::runtime_error("pack mesh " + std::to_string(m) + " ('" + to_string(pack.mesh_name(m)) +
-                               "') names node " + std::to_string(mr.node_index) + " primitive " +
-                               std::to_string(mr.primitive) + ", which the scene does not have: "
+      throw std::runtime_error("pack mesh " + std::to_string(m) + " ('" +
+                               to_string(pack.mesh_name(m)) + "') names node " +
+                               std::to_string(mr.node_index) + " primitive " +
+                               std::to_string(mr.primitive) +
+                               ", which the scene does not have: "
                                "was the pack cooked from this scene?");
     }
     const std::vector<glm::vec3> positions = scene.world_positions(node, prim);
     const int mat = scene.primitive_material(node, prim);
-    const GltfMaterial material = mat >= 0 ? scene.materials()[static_cast<size_t>(mat)] : GltfMaterial{};
+    const GltfMaterial material =
+        mat >= 0 ? scene.materials()[static_cast<size_t>(mat)] : GltfMaterial{};
     if (material.double_sided) w.double_sided = true;
     const bool emissive = material.emissive != glm::vec3(0.0f);
     const uint32_t base = static_cast<uint32_t>(w.vertices.size());
@@ -106,7 +116,8 @@ World build_world(const GltfScene& scene, const PackView& pack) {
       }
       w.vertices.push_back(wv);
     }
-    std::vector<uint32_t>& out = mr.object == pack::kNone16 ? static_indices : object_indices[mr.object];
+    std::vector<uint32_t>& out =
+        mr.object == pack::kNone16 ? static_indices : object_indices[mr.object];
     const uint32_t* idx = pack.mesh_indices(m);
     for (uint32_t i = 0; i < mr.index_count; ++i) out.push_back(base + idx[i]);
   }
@@ -122,7 +133,8 @@ World build_world(const GltfScene& scene, const PackView& pack) {
   w.bounds_max = hi;
   for (uint32_t o = 0; o < pack.object_count(); ++o) {
     WorldObject& wo = w.objects[o];
-    wo.range = {static_cast<uint32_t>(w.indices.size()), static_cast<uint32_t>(object_indices[o].size())};
+    wo.range = {static_cast<uint32_t>(w.indices.size()),
+                static_cast<uint32_t>(object_indices[o].size())};
     glm::vec3 olo(std::numeric_limits<float>::max()), ohi(-std::numeric_limits<float>::max());
     for (uint32_t i : object_indices[o]) {
       const WorldVertex& v = w.vertices[i];

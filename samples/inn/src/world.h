@@ -21,11 +21,11 @@ class GltfScene;
 
 // One vertex as the GPU reads it (see SceneRenderer).
 struct WorldVertex {
-  float position[3];  // world space, metres
+  float position[3];     // world space, metres
   float lightmap_uv[2];  // glTF convention (v = 0 is the light map's top row)
   uint8_t albedo[4];     // linear RGB * 255, alpha unused
   float emissive[3];     // linear radiance of an emissive surface
-  float flame;           // pack light index whose flame this is (its emission follows the light), or -1
+  float flame;  // pack light index whose flame this is (its emission follows the light), or -1
 };
 static_assert(sizeof(WorldVertex) == 40);
 
@@ -52,10 +52,10 @@ struct WorldObject {
 struct World {
   std::vector<WorldVertex> vertices;
   std::vector<uint32_t> indices;
-  IndexRange static_range;            // everything that is not a semi-dynamic object
-  std::vector<WorldLight> lights;     // per pack light index
-  std::vector<WorldObject> objects;   // per pack object index
-  bool double_sided = false;          // some material is double-sided: draw without culling
+  IndexRange static_range;           // everything that is not a semi-dynamic object
+  std::vector<WorldLight> lights;    // per pack light index
+  std::vector<WorldObject> objects;  // per pack object index
+  bool double_sided = false;         // some material is double-sided: draw without culling
   glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
 };
 

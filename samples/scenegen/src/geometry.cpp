@@ -22,7 +22,9 @@ void Geometry::append(const Geometry& other) {
   for (std::uint32_t i : other.indices) indices.push_back(base + i);
 }
 
-void Geometry::append(const Geometry& other, const glm::mat4& m) { append(other.transformed(m)); }
+void Geometry::append(const Geometry& other, const glm::mat4& m) {
+  append(other.transformed(m));
+}
 
 void Geometry::transform(const glm::mat4& m) {
   const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(m)));
@@ -33,7 +35,8 @@ void Geometry::transform(const glm::mat4& m) {
     n = len > 0.0f ? t / len : n;
   }
   if (glm::determinant(glm::mat3(m)) < 0.0f) {
-    for (std::size_t i = 0; i + 2 < indices.size(); i += 3) std::swap(indices[i + 1], indices[i + 2]);
+    for (std::size_t i = 0; i + 2 < indices.size(); i += 3)
+      std::swap(indices[i + 1], indices[i + 2]);
   }
 }
 
@@ -64,12 +67,17 @@ glm::vec3 Geometry::bounds_max() const {
 
 void Geometry::check() const {
   const std::size_t n = positions.size();
-  if (normals.size() != n) throw std::invalid_argument("Geometry: normals count != positions count");
-  if (!uv0.empty() && uv0.size() != n) throw std::invalid_argument("Geometry: uv0 count != positions count");
-  if (!uv1.empty() && uv1.size() != n) throw std::invalid_argument("Geometry: uv1 count != positions count");
-  if (indices.size() % 3 != 0) throw std::invalid_argument("Geometry: index count is not a multiple of 3");
+  if (normals.size() != n)
+    throw std::invalid_argument("Geometry: normals count != positions count");
+  if (!uv0.empty() && uv0.size() != n)
+    throw std::invalid_argument("Geometry: uv0 count != positions count");
+  if (!uv1.empty() && uv1.size() != n)
+    throw std::invalid_argument("Geometry: uv1 count != positions count");
+  if (indices.size() % 3 != 0)
+    throw std::invalid_argument("Geometry: index count is not a multiple of 3");
   for (std::uint32_t i : indices) {
-    if (i >= n) throw std::invalid_argument("Geometry: index " + std::to_string(i) + " out of range");
+    if (i >= n)
+      throw std::invalid_argument("Geometry: index " + std::to_string(i) + " out of range");
   }
   for (std::size_t i = 0; i < n; ++i) {
     const glm::vec3& p = positions[i];

@@ -25,7 +25,9 @@ constexpr int kArrayBuffer = 34962;
 constexpr int kElementArrayBuffer = 34963;
 constexpr float kHalfPi = 1.57079632679489662f;
 
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(glm::vec3 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 Json vec_json(const float* v, int n) {
   Json a = Json::array();
@@ -56,12 +58,14 @@ bool use_uint16(const Primitive& p) {
 }
 
 std::string base64(const std::vector<std::uint8_t>& data) {
-  static constexpr char kTable[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  static constexpr char kTable[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   out.reserve((data.size() + 2) / 3 * 4);
   std::size_t i = 0;
   for (; i + 2 < data.size(); i += 3) {
-    const std::uint32_t v = (std::uint32_t{data[i]} << 16) | (std::uint32_t{data[i + 1]} << 8) | data[i + 2];
+    const std::uint32_t v =
+        (std::uint32_t{data[i]} << 16) | (std::uint32_t{data[i + 1]} << 8) | data[i + 2];
     out += kTable[(v >> 18) & 63];
     out += kTable[(v >> 12) & 63];
     out += kTable[(v >> 6) & 63];
@@ -104,7 +108,8 @@ void write_atomically(const std::filesystem::path& path, const void* data, std::
 
 glm::quat rotation_towards(glm::vec3 direction) {
   const float len = glm::length(direction);
-  if (!(len > 0.0f) || !std::isfinite(len)) throw std::invalid_argument("rotation_towards: zero direction");
+  if (!(len > 0.0f) || !std::isfinite(len))
+    throw std::invalid_argument("rotation_towards: zero direction");
   const glm::vec3 d = direction / len;
   const glm::vec3 from(0.0f, 0.0f, -1.0f);
   const float c = glm::dot(from, d);
@@ -125,7 +130,8 @@ int SceneBuilder::add_material(Material material) {
     throw std::invalid_argument("material '" + material.name + "': emissive outside [0, 1]");
   }
   if (!in01(material.metallic) || !in01(material.roughness)) {
-    throw std::invalid_argument("material '" + material.name + "': metallic/roughness outside [0, 1]");
+    throw std::invalid_argument("material '" + material.name +
+                                "': metallic/roughness outside [0, 1]");
   }
   if (!(material.emissive_strength >= 0.0f) || !std::isfinite(material.emissive_strength)) {
     throw std::invalid_argument("material '" + material.name + "': bad emissive strength");
@@ -142,7 +148,8 @@ int SceneBuilder::add_mesh(std::string name, std::vector<Primitive> primitives) 
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("mesh '" + name + "': " + e.what());
     }
-    if (p.geometry.empty()) throw std::invalid_argument("mesh '" + name + "' has an empty primitive");
+    if (p.geometry.empty())
+      throw std::invalid_argument("mesh '" + name + "' has an empty primitive");
     if (p.material < -1 || p.material >= static_cast<int>(materials_.size())) {
       throw std::invalid_argument("mesh '" + name + "': unknown material");
     }
@@ -154,7 +161,8 @@ int SceneBuilder::add_mesh(std::string name, std::vector<Primitive> primitives) 
   return static_cast<int>(meshes_.size()) - 1;
 }
 
-int SceneBuilder::add_mesh(std::string name, Geometry geometry, int material, IndexType index_type) {
+int SceneBuilder::add_mesh(std::string name, Geometry geometry, int material,
+                           IndexType index_type) {
   std::vector<Primitive> primitives;
   primitives.push_back({std::move(geometry), material, index_type});
   return add_mesh(std::move(name), std::move(primitives));
@@ -162,11 +170,14 @@ int SceneBuilder::add_mesh(std::string name, Geometry geometry, int material, In
 
 int SceneBuilder::add_light(Light light) {
   const std::string what = "light '" + light.name + "': ";
-  if (!finite(light.color) || light.color.r < 0.0f || light.color.g < 0.0f || light.color.b < 0.0f) {
+  if (!finite(light.color) || light.color.r < 0.0f || light.color.g < 0.0f ||
+      light.color.b < 0.0f) {
     throw std::invalid_argument(what + "bad colour");
   }
-  if (!(light.intensity >= 0.0f) || !std::isfinite(light.intensity)) throw std::invalid_argument(what + "bad intensity");
-  if (!(light.range >= 0.0f) || !std::isfinite(light.range)) throw std::invalid_argument(what + "bad range");
+  if (!(light.intensity >= 0.0f) || !std::isfinite(light.intensity))
+    throw std::invalid_argument(what + "bad intensity");
+  if (!(light.range >= 0.0f) || !std::isfinite(light.range))
+    throw std::invalid_argument(what + "bad range");
   if (light.type == LightType::kSpot &&
       !(light.inner_cone_angle >= 0.0f && light.inner_cone_angle < light.outer_cone_angle &&
         light.outer_cone_angle <= kHalfPi)) {
@@ -233,7 +244,8 @@ std::size_t SceneBuilder::triangle_count() const {
   std::size_t total = 0;
   for (const Node& n : nodes_) {
     if (n.mesh < 0) continue;
-    for (const Primitive& p : meshes_[static_cast<std::size_t>(n.mesh)].primitives) total += p.geometry.triangle_count();
+    for (const Primitive& p : meshes_[static_cast<std::size_t>(n.mesh)].primitives)
+      total += p.geometry.triangle_count();
   }
   return total;
 }
@@ -247,7 +259,8 @@ void SceneBuilder::check_graph() const {
         throw std::invalid_argument("node '" + nodes_[i].name + "': bad child index");
       }
       if (parent[static_cast<std::size_t>(c)] != -1) {
-        throw std::invalid_argument("node '" + nodes_[static_cast<std::size_t>(c)].name + "' has two parents");
+        throw std::invalid_argument("node '" + nodes_[static_cast<std::size_t>(c)].name +
+                                    "' has two parents");
       }
       parent[static_cast<std::size_t>(c)] = static_cast<int>(i);
     }
@@ -305,8 +318,8 @@ Json build_document(const std::vector<Material>& materials, const auto& meshes,
     } else {
       const glm::quat q = glm::normalize(n.rotation);
       if (q != glm::quat(1.0f, 0.0f, 0.0f, 0.0f)) {
-        j["rotation"] = {static_cast<double>(q.x), static_cast<double>(q.y), static_cast<double>(q.z),
-                         static_cast<double>(q.w)};
+        j["rotation"] = {static_cast<double>(q.x), static_cast<double>(q.y),
+                         static_cast<double>(q.z), static_cast<double>(q.w)};
       }
       if (n.scale != glm::vec3(1.0f)) j["scale"] = vec_json(&n.scale.x, 3);
       if (n.translation != glm::vec3(0.0f)) j["translation"] = vec_json(&n.translation.x, 3);
@@ -396,10 +409,13 @@ Json build_document(const std::vector<Material>& materials, const auto& meshes,
         accessors[static_cast<std::size_t>(pos)]["max"] = vec_json(&hi.x, 3);
         attributes["POSITION"] = pos;
         attributes["NORMAL"] = add_accessor(-1, kFloat, d.point_count, "VEC3");
-        if (!g.uv0.empty()) attributes["TEXCOORD_0"] = add_accessor(-1, kFloat, d.point_count, "VEC2");
-        if (!g.uv1.empty()) attributes["TEXCOORD_1"] = add_accessor(-1, kFloat, d.point_count, "VEC2");
+        if (!g.uv0.empty())
+          attributes["TEXCOORD_0"] = add_accessor(-1, kFloat, d.point_count, "VEC2");
+        if (!g.uv1.empty())
+          attributes["TEXCOORD_1"] = add_accessor(-1, kFloat, d.point_count, "VEC2");
         prim["attributes"] = attributes;
-        prim["indices"] = add_accessor(-1, small_indices ? kUnsignedShort : kUnsignedInt, d.face_count * 3, "SCALAR");
+        prim["indices"] = add_accessor(-1, small_indices ? kUnsignedShort : kUnsignedInt,
+                                       d.face_count * 3, "SCALAR");
         Json ext_attributes;
         for (const char* semantic : {"POSITION", "NORMAL", "TEXCOORD_0", "TEXCOORD_1"}) {
           const auto it = d.attribute_ids.find(semantic);
@@ -409,20 +425,20 @@ Json build_document(const std::vector<Material>& materials, const auto& meshes,
                                                             {"attributes", ext_attributes}};
       } else {
         const std::size_t n = g.vertex_count();
-        const int pos = add_accessor(add_view(g.positions.data(), n * sizeof(glm::vec3), kArrayBuffer),
-                                     kFloat, n, "VEC3");
+        const int pos = add_accessor(
+            add_view(g.positions.data(), n * sizeof(glm::vec3), kArrayBuffer), kFloat, n, "VEC3");
         accessors[static_cast<std::size_t>(pos)]["min"] = vec_json(&lo.x, 3);
         accessors[static_cast<std::size_t>(pos)]["max"] = vec_json(&hi.x, 3);
         attributes["POSITION"] = pos;
-        attributes["NORMAL"] =
-            add_accessor(add_view(normals.data(), n * sizeof(glm::vec3), kArrayBuffer), kFloat, n, "VEC3");
+        attributes["NORMAL"] = add_accessor(
+            add_view(normals.data(), n * sizeof(glm::vec3), kArrayBuffer), kFloat, n, "VEC3");
         if (!g.uv0.empty()) {
-          attributes["TEXCOORD_0"] =
-              add_accessor(add_view(g.uv0.data(), n * sizeof(glm::vec2), kArrayBuffer), kFloat, n, "VEC2");
+          attributes["TEXCOORD_0"] = add_accessor(
+              add_view(g.uv0.data(), n * sizeof(glm::vec2), kArrayBuffer), kFloat, n, "VEC2");
         }
         if (!g.uv1.empty()) {
-          attributes["TEXCOORD_1"] =
-              add_accessor(add_view(g.uv1.data(), n * sizeof(glm::vec2), kArrayBuffer), kFloat, n, "VEC2");
+          attributes["TEXCOORD_1"] = add_accessor(
+              add_view(g.uv1.data(), n * sizeof(glm::vec2), kArrayBuffer), kFloat, n, "VEC2");
         }
         prim["attributes"] = attributes;
         int view;
@@ -430,9 +446,11 @@ Json build_document(const std::vector<Material>& materials, const auto& meshes,
           std::vector<std::uint16_t> idx(g.indices.begin(), g.indices.end());
           view = add_view(idx.data(), idx.size() * sizeof(std::uint16_t), kElementArrayBuffer);
         } else {
-          view = add_view(g.indices.data(), g.indices.size() * sizeof(std::uint32_t), kElementArrayBuffer);
+          view = add_view(g.indices.data(), g.indices.size() * sizeof(std::uint32_t),
+                          kElementArrayBuffer);
         }
-        prim["indices"] = add_accessor(view, small_indices ? kUnsignedShort : kUnsignedInt, g.indices.size(), "SCALAR");
+        prim["indices"] = add_accessor(view, small_indices ? kUnsignedShort : kUnsignedInt,
+                                       g.indices.size(), "SCALAR");
       }
       if (p.material >= 0) prim["material"] = p.material;
       jprims.push_back(prim);
@@ -467,7 +485,8 @@ Json build_document(const std::vector<Material>& materials, const auto& meshes,
           j["type"] = "directional";
           break;
       }
-      if (l.type != LightType::kDirectional && l.range > 0.0f) j["range"] = static_cast<double>(l.range);
+      if (l.type != LightType::kDirectional && l.range > 0.0f)
+        j["range"] = static_cast<double>(l.range);
       jlights.push_back(j);
     }
     doc["extensions"]["KHR_lights_punctual"]["lights"] = jlights;
@@ -491,7 +510,8 @@ std::vector<std::uint8_t> SceneBuilder::to_glb(const WriteOptions& options) cons
   std::string json = doc.dump();
   while (json.size() % 4 != 0) json += ' ';
   const std::size_t total = 12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin.size());
-  if (total > std::numeric_limits<std::uint32_t>::max()) throw std::runtime_error("scene too large for .glb");
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    throw std::runtime_error("scene too large for .glb");
   std::vector<std::uint8_t> out;
   out.reserve(total);
   auto put32 = [&](std::uint32_t v) {
@@ -520,7 +540,8 @@ std::string SceneBuilder::to_gltf(const WriteOptions& options, const std::string
     if (options.storage == BufferStorage::kEmbedded) {
       doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(data);
     } else {
-      if (bin == nullptr) throw std::invalid_argument("to_gltf: external storage needs a bin output");
+      if (bin == nullptr)
+        throw std::invalid_argument("to_gltf: external storage needs a bin output");
       doc["buffers"][0]["uri"] = bin_uri;
       *bin = std::move(data);
     }
@@ -531,7 +552,8 @@ std::string SceneBuilder::to_gltf(const WriteOptions& options, const std::string
 void SceneBuilder::write(const std::string& path, const WriteOptions& options) const {
   const std::filesystem::path p(path);
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".glb") {
     const std::vector<std::uint8_t> glb = to_glb(options);
     write_atomically(p, glb.data(), glb.size());

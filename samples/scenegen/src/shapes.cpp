@@ -37,7 +37,8 @@ void add_grid(Geometry& g, glm::vec3 origin, glm::vec3 u, glm::vec3 v, const std
 
 std::vector<float> uniform_steps(int n) {
   std::vector<float> r(static_cast<std::size_t>(n) + 1);
-  for (int i = 0; i <= n; ++i) r[static_cast<std::size_t>(i)] = static_cast<float>(i) / static_cast<float>(n);
+  for (int i = 0; i <= n; ++i)
+    r[static_cast<std::size_t>(i)] = static_cast<float>(i) / static_cast<float>(n);
   return r;
 }
 
@@ -70,8 +71,9 @@ Geometry make_box(glm::vec3 min, glm::vec3 max, Facing facing, int subdivisions)
   for (const BoxFace& f : kBoxFaces) {
     const glm::vec3 origin = min + f.origin_select * size;
     const glm::vec3 normal = glm::cross(f.u, f.v);
-    add_grid(g, origin, f.u * size, f.v * size, steps, steps,
-             [&](glm::vec3 p) { return std::pair{p, normal}; });
+    add_grid(g, origin, f.u * size, f.v * size, steps, steps, [&](glm::vec3 p) {
+      return std::pair{p, normal};
+    });
   }
   if (facing == Facing::kInward) g.flip();
   return g;
@@ -79,7 +81,8 @@ Geometry make_box(glm::vec3 min, glm::vec3 max, Facing facing, int subdivisions)
 
 Geometry make_rounded_box(glm::vec3 min, glm::vec3 max, float bevel, int segments) {
   require(segments >= 1, "make_rounded_box: segments must be >= 1");
-  require(min.x < max.x && min.y < max.y && min.z < max.z, "make_rounded_box: min must be below max");
+  require(min.x < max.x && min.y < max.y && min.z < max.z,
+          "make_rounded_box: min must be below max");
   const glm::vec3 size = max - min;
   const float r = std::min(bevel, 0.45f * std::min({size.x, size.y, size.z}));
   if (!(r > 0.0f)) return make_box(min, max);
@@ -95,11 +98,13 @@ Geometry make_rounded_box(glm::vec3 min, glm::vec3 max, float bevel, int segment
     auto steps = [&](float len) {
       std::vector<float> s;
       for (int i = 0; i <= segments; ++i) {
-        const float angle = 0.25f * kPi * static_cast<float>(segments - i) / static_cast<float>(segments);
+        const float angle =
+            0.25f * kPi * static_cast<float>(segments - i) / static_cast<float>(segments);
         s.push_back((r - r * std::tan(angle)) / len);
       }
       for (int i = segments; i >= 0; --i) {
-        const float angle = 0.25f * kPi * static_cast<float>(segments - i) / static_cast<float>(segments);
+        const float angle =
+            0.25f * kPi * static_cast<float>(segments - i) / static_cast<float>(segments);
         s.push_back(1.0f - (r - r * std::tan(angle)) / len);
       }
       s.front() = 0.0f;
@@ -255,7 +260,8 @@ Geometry make_sphere(float radius, int segments, int rings) {
     const float theta = kPi * static_cast<float>(j) / static_cast<float>(rings);
     for (std::uint32_t s = 0; s < seg; ++s) {
       const float phi = 2.0f * kPi * static_cast<float>(s) / static_cast<float>(seg);
-      const glm::vec3 n(std::sin(theta) * std::cos(phi), -std::cos(theta), -std::sin(theta) * std::sin(phi));
+      const glm::vec3 n(std::sin(theta) * std::cos(phi), -std::cos(theta),
+                        -std::sin(theta) * std::sin(phi));
       g.positions.push_back(n * radius);
       g.normals.push_back(n);
     }

@@ -25,8 +25,8 @@ double furnace_flux(float rho, int n) {
   Report report;
   BakeOptions o;
   o.quality = Quality::kProduction;
-  const BakedMaps maps =
-      bake_maps(s, test::bare_layout(texels.width, texels.height), texels, *tracer, o, progress, report);
+  const BakedMaps maps = bake_maps(s, test::bare_layout(texels.width, texels.height), texels,
+                                   *tracer, o, progress, report);
   double flux = 0.0;
   for (size_t t = 0; t < texels.position.size(); ++t) {
     const int x = int(t % size_t(texels.width)), y = int(t / size_t(texels.width));
@@ -46,8 +46,8 @@ TEST(IndirectQuality, FurnaceAtProduction) {
   for (const Case c : {Case{0.5f, 0.03}, Case{0.9f, 0.05}}) {
     const double flux = furnace_flux(c.rho, 24);
     const double expected = 4.0 * kPi / (1.0 - c.rho);
-    std::printf("furnace production rho %.2f: flux %.4f, expected %.4f, error %+.2f%%\n", c.rho, flux,
-                expected, 100.0 * (flux / expected - 1.0));
+    std::printf("furnace production rho %.2f: flux %.4f, expected %.4f, error %+.2f%%\n", c.rho,
+                flux, expected, 100.0 * (flux / expected - 1.0));
     EXPECT_NEAR(flux / expected, 1.0, c.tolerance) << "rho " << c.rho;
   }
 }
@@ -77,7 +77,8 @@ struct Room {
       test::add_box(scene, lo[i], hi[i], names[i], i, i == 1 ? 2 : 0);
     }
     scene.lights = {test::point_light("lamp", {0.2f, 2.2f, 0.1f}, 6.0f, true),
-                    test::spot_light("spot", {1.5f, 2.0f, 0.5f}, {-1.0f, -0.4f, -0.2f}, 25.0f, 0.3f, 0.6f, true)};
+                    test::spot_light("spot", {1.5f, 2.0f, 0.5f}, {-1.0f, -0.4f, -0.2f}, 25.0f, 0.3f,
+                                     0.6f, true)};
     test::finish(scene);
     texels = test::box_texels({-2.9f, 0, -3}, {3, 2.5f, 3}, 20);
   }
@@ -109,14 +110,16 @@ TEST(IndirectQuality, RecomposeMatchesBakeStateForRandomStates) {
       lo.has_intensity = true;
       lo.intensity = l.intensity * (0.3f + 2.0f * unit(rng));
       state.lights[l.name] = lo;
-      radiant[k] = lo.on ? glm::vec3(lo.color[0], lo.color[1], lo.color[2]) * lo.intensity : glm::vec3(0.0f);
+      radiant[k] =
+          lo.on ? glm::vec3(lo.color[0], lo.color[1], lo.color[2]) * lo.intensity : glm::vec3(0.0f);
     }
     std::vector<bool> visible(f.scene.objects.size());
     for (size_t ob = 0; ob < visible.size(); ++ob) {
       visible[ob] = trial == 0 || unit(rng) < 0.6f;
       state.objects[f.scene.objects[ob].name] = visible[ob];
     }
-    const FloatImage direct = bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+    const FloatImage direct =
+        bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
     double err2 = 0.0, ref2 = 0.0;
     for (int y = 0; y < f.texels.height; ++y) {
       for (int x = 0; x < f.texels.width; ++x) {
@@ -126,7 +129,8 @@ TEST(IndirectQuality, RecomposeMatchesBakeStateForRandomStates) {
             const FloatImage& cm = maps.contribution[k];
             double t = cm.at(x, y, cm.channels == 3 ? c : 0);
             for (const ShadowMap& s : maps.shadows) {
-              if (s.light == int(k) && visible[size_t(s.object)]) t -= s.map.at(x, y, s.map.channels == 3 ? c : 0);
+              if (s.light == int(k) && visible[size_t(s.object)])
+                t -= s.map.at(x, y, s.map.channels == 3 ? c : 0);
             }
             v += radiant[k][c] * t;
           }

@@ -24,8 +24,9 @@ Quality parse_quality(const std::string& name);  // throws CookError
 
 struct BakeOptions {
   Quality quality = Quality::kPreview;
-  int area_samples = 0;  // samples per texel for lights with a radius / emissive surfaces; 0 = preset
-  int threads = 0;       // 0 = all cores
+  int area_samples =
+      0;            // samples per texel for lights with a radius / emissive surfaces; 0 = preset
+  int threads = 0;  // 0 = all cores
   uint64_t seed = 1;
   // Indirect light (photons -> virtual indirect lights, seed 004). Presets per quality:
   //   draft 30k photons / 192 VPLs / bias 1, preview 120k / 512 / 1, production 500k / 2048 / 0.5.

@@ -27,9 +27,9 @@ struct MeshLayout {
 // A baked object: one glTF node's meshes, owning one rectangle of the light map that no other
 // baked object overlaps. Patches are cut per region.
 struct Region {
-  std::string name;          // node name
-  int object = -1;           // semi-dynamic object index or -1
-  std::vector<int> meshes;   // MeshInstance indices
+  std::string name;         // node name
+  int object = -1;          // semi-dynamic object index or -1
+  std::vector<int> meshes;  // MeshInstance indices
   Rect rect;
 };
 
@@ -49,9 +49,9 @@ struct LayoutOptions {
 };
 
 struct Layout {
-  int width = 0, height = 0;   // texels
-  float texels_per_unit = 0;   // the density actually used (may be lowered to fit)
-  bool verbatim_uv1 = false;   // every mesh had a valid TEXCOORD_1
+  int width = 0, height = 0;       // texels
+  float texels_per_unit = 0;       // the density actually used (may be lowered to fit)
+  bool verbatim_uv1 = false;       // every mesh had a valid TEXCOORD_1
   std::vector<MeshLayout> meshes;  // parallel to Scene::meshes
   std::vector<Region> regions;
   std::vector<SeamEdge> seams;

@@ -12,7 +12,8 @@ struct FloatImage {
   int width = 0, height = 0, channels = 0;
   std::vector<float> data;
   FloatImage() = default;
-  FloatImage(int w, int h, int c) : width(w), height(h), channels(c), data(size_t(w) * h * c, 0.0f) {}
+  FloatImage(int w, int h, int c)
+      : width(w), height(h), channels(c), data(size_t(w) * h * c, 0.0f) {}
   float& at(int x, int y, int c) { return data[(size_t(y) * width + x) * channels + c]; }
   float at(int x, int y, int c) const { return data[(size_t(y) * width + x) * channels + c]; }
 };
@@ -48,12 +49,12 @@ struct BakedMaps {
   // intensity), floored so that a light authored off or at 0 still keeps its patches, and at
   // most one 8-bit step of the light's own peak (so a very dim light recomposes alone to 8 bits).
   float output_step = 0.0f;
-  FloatImage base;                        // B, 3 channels
-  std::vector<int> lights;                // Scene::lights index of each semi-dynamic light
-  std::vector<FloatImage> contribution;   // C_l, parallel to lights
-  std::vector<ShadowMap> shadows;         // kept pairs only
+  FloatImage base;                       // B, 3 channels
+  std::vector<int> lights;               // Scene::lights index of each semi-dynamic light
+  std::vector<FloatImage> contribution;  // C_l, parallel to lights
+  std::vector<ShadowMap> shadows;        // kept pairs only
   std::vector<PairCorrectionMap> pair_corrections;  // overlapping shadows that matter
-  std::vector<StaticShadowMap> static_shadows;  // what objects change in the static light
+  std::vector<StaticShadowMap> static_shadows;      // what objects change in the static light
 };
 
 }  // namespace lightpatch::cooker

@@ -19,7 +19,8 @@ class Progress {
   void advance(uint64_t units = 1);
   // Ends the stage; returns its elapsed seconds.
   double end();
-  void message(const std::string& text);  // a line of its own (not suppressed by quiet? no: suppressed)
+  void message(
+      const std::string& text);  // a line of its own (not suppressed by quiet? no: suppressed)
   bool quiet() const { return quiet_; }
 
  private:

@@ -47,14 +47,14 @@ struct Light {
   std::string name;  // glTF node name
   int node_index = -1;
   LightType type = LightType::kPoint;
-  glm::vec3 position{0.0f};             // world space (point, spot)
+  glm::vec3 position{0.0f};                // world space (point, spot)
   glm::vec3 direction{0.0f, 0.0f, -1.0f};  // world space unit vector the light shines along
-  glm::vec3 color{1.0f};                // linear RGB
-  float intensity = 1.0f;               // candela (point, spot) or lux (directional)
-  float range = 0.0f;                   // metres; 0 = infinite (KHR_lights_punctual)
-  float inner_cone = 0.0f;              // radians (spot)
-  float outer_cone = 0.785398163f;      // radians (spot), pi/4 default per the spec
-  float radius = 0.0f;                  // metres; > 0 gives soft shadows (extras.lightRadius)
+  glm::vec3 color{1.0f};                   // linear RGB
+  float intensity = 1.0f;                  // candela (point, spot) or lux (directional)
+  float range = 0.0f;                      // metres; 0 = infinite (KHR_lights_punctual)
+  float inner_cone = 0.0f;                 // radians (spot)
+  float outer_cone = 0.785398163f;         // radians (spot), pi/4 default per the spec
+  float radius = 0.0f;                     // metres; > 0 gives soft shadows (extras.lightRadius)
   bool semi_dynamic = false;
 };
 

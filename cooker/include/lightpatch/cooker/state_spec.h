@@ -21,8 +21,8 @@ struct StateSpec {
   std::map<std::string, bool> objects;  // name -> visible
 };
 StateSpec parse_state_json(const std::string& text, const std::string& what);  // throws CookError
-StateSpec load_state_file(const std::string& path);                           // throws CookError
+StateSpec load_state_file(const std::string& path);                            // throws CookError
 // --states: one JSON state per non-empty line.
-std::vector<StateSpec> load_states_jsonl(const std::string& path);            // throws CookError
+std::vector<StateSpec> load_states_jsonl(const std::string& path);  // throws CookError
 
 }  // namespace lightpatch::cooker

@@ -17,6 +17,7 @@ TexelSet build_texels(const Scene& scene, const Layout& layout, const Tracer* tr
 
 // Makes texels on both sides of a chart cut agree, then fills invalid texels from their nearest
 // valid neighbours (within the texel's region) so bilinear filtering shows no black seams.
-void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout, const TexelSet& texels);
+void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout,
+                  const TexelSet& texels);
 
 }  // namespace lightpatch::cooker

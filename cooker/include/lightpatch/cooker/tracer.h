@@ -14,9 +14,9 @@ namespace lightpatch::cooker {
 struct Hit {
   bool hit = false;
   float t = 0.0f;
-  int mesh = -1;       // MeshInstance index
-  int triangle = -1;   // triangle within the mesh
-  float u = 0, v = 0;  // barycentrics of vertices 1 and 2
+  int mesh = -1;                     // MeshInstance index
+  int triangle = -1;                 // triangle within the mesh
+  float u = 0, v = 0;                // barycentrics of vertices 1 and 2
   glm::vec3 geometric_normal{0.0f};  // unit, world space, facing per winding
 };
 

@@ -57,9 +57,9 @@ class EglContext {
   bool poll_event(InputEvent* event);
 
  private:
-  void* display_ = nullptr;  // EGLDisplay
-  void* context_ = nullptr;  // EGLContext
-  void* surface_ = nullptr;  // EGLSurface, null when surfaceless
+  void* display_ = nullptr;    // EGLDisplay
+  void* context_ = nullptr;    // EGLContext
+  void* surface_ = nullptr;    // EGLSurface, null when surfaceless
   void* x_display_ = nullptr;  // Display*
   unsigned long window_ = 0;   // X11 Window
   unsigned long wm_delete_ = 0;

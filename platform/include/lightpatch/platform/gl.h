@@ -3,5 +3,8 @@
 // only this file.
 #pragma once
 
+// gl2ext.h needs the types gl3.h declares: keep this order.
+// clang-format off
 #include <GLES3/gl3.h>
 #include <GLES2/gl2ext.h>
+// clang-format on

@@ -14,9 +14,9 @@ namespace lightpatch::scenegen {
 
 struct Geometry {
   std::vector<glm::vec3> positions{};
-  std::vector<glm::vec3> normals{};   // unit length, one per position
-  std::vector<glm::vec2> uv0{};      // empty, or one per position (TEXCOORD_0)
-  std::vector<glm::vec2> uv1{};      // empty, or one per position (TEXCOORD_1, light-map UVs)
+  std::vector<glm::vec3> normals{};      // unit length, one per position
+  std::vector<glm::vec2> uv0{};          // empty, or one per position (TEXCOORD_0)
+  std::vector<glm::vec2> uv1{};          // empty, or one per position (TEXCOORD_1, light-map UVs)
   std::vector<std::uint32_t> indices{};  // three per triangle
 
   std::size_t vertex_count() const { return positions.size(); }

@@ -11,10 +11,10 @@
 // Usage:
 //   SceneBuilder b;
 //   int wood = b.add_material({.name = "wood", .base_color = {0.5f, 0.3f, 0.15f, 1.0f}});
-//   int table = b.add_mesh("table", make_rounded_box({-1, 0, -0.5f}, {1, 0.8f, 0.5f}, 0.02f), wood);
-//   b.add_node({.name = "table_0", .mesh = table});
-//   int l = b.add_light({.name = "candle", .type = LightType::kPoint, .intensity = 2.0f});
-//   b.add_node({.name = "candle_0", .translation = {0, 1, 0}, .light = l,
+//   int table = b.add_mesh("table", make_rounded_box({-1, 0, -0.5f}, {1, 0.8f, 0.5f}, 0.02f),
+//   wood); b.add_node({.name = "table_0", .mesh = table}); int l = b.add_light({.name = "candle",
+//   .type = LightType::kPoint, .intensity = 2.0f}); b.add_node({.name = "candle_0", .translation =
+//   {0, 1, 0}, .light = l,
 //               .semi_dynamic = true, .light_radius = 0.02f});
 //   b.write("scene.glb");                       // or .gltf (+ .bin beside it), WriteOptions
 //
@@ -68,11 +68,11 @@ enum class LightType { kPoint, kSpot, kDirectional };
 struct Light {
   std::string name{};
   LightType type = LightType::kPoint;
-  glm::vec3 color{1.0f};   // linear RGB
-  float intensity = 1.0f;  // candela (point, spot) or lux (directional)
-  float range = 0.0f;      // metres; 0 = infinite (omitted); ignored for directional lights
-  float inner_cone_angle = 0.0f;                    // spot only, radians, < outer
-  float outer_cone_angle = 0.78539816339744831f;    // spot only, radians, in (0, π/2]
+  glm::vec3 color{1.0f};          // linear RGB
+  float intensity = 1.0f;         // candela (point, spot) or lux (directional)
+  float range = 0.0f;             // metres; 0 = infinite (omitted); ignored for directional lights
+  float inner_cone_angle = 0.0f;  // spot only, radians, < outer
+  float outer_cone_angle = 0.78539816339744831f;  // spot only, radians, in (0, π/2]
 };
 
 struct Node {
@@ -81,11 +81,11 @@ struct Node {
   glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  // (w, x, y, z)
   glm::vec3 scale{1.0f};
   std::optional<glm::mat4> matrix{};  // when set, written instead of TRS (must be decomposable)
-  int mesh = -1;                    // index from add_mesh()
-  int light = -1;                   // index from add_light() (KHR_lights_punctual)
-  std::vector<int> children{};      // node indices
-  bool semi_dynamic = false;        // extras.semiDynamic
-  float light_radius = 0.0f;        // > 0 writes extras.lightRadius (metres)
+  int mesh = -1;                      // index from add_mesh()
+  int light = -1;                     // index from add_light() (KHR_lights_punctual)
+  std::vector<int> children{};        // node indices
+  bool semi_dynamic = false;          // extras.semiDynamic
+  float light_radius = 0.0f;          // > 0 writes extras.lightRadius (metres)
 };
 
 enum class BufferStorage {
@@ -94,11 +94,11 @@ enum class BufferStorage {
 };
 
 struct WriteOptions {
-  bool draco = false;           // KHR_draco_mesh_compression for every primitive
+  bool draco = false;            // KHR_draco_mesh_compression for every primitive
   int draco_position_bits = 14;  // quantization bits (Draco)
   int draco_normal_bits = 10;
   int draco_texcoord_bits = 12;
-  int draco_speed = 5;  // 0 (best compression) .. 10 (fastest)
+  int draco_speed = 5;                               // 0 (best compression) .. 10 (fastest)
   BufferStorage storage = BufferStorage::kExternal;  // ignored for .glb
 };
 
