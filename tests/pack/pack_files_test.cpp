@@ -32,7 +32,7 @@ std::vector<uint8_t> read_bytes(const std::string& path) {
 
 // Keeps the committed packs byte-equal to what the cooker writes today. Set
 // LIGHTPATCH_REGENERATE_PACKS=1 to rewrite them after an intended change (then commit them and
-// copy them to tests/fuzz/corpus/pack/).
+// copy them to tests/fuzz/corpus/pack_load/).
 void check_committed(const std::string& name, const std::vector<uint8_t>& built) {
   if (std::getenv("LIGHTPATCH_REGENERATE_PACKS") != nullptr) {
     std::ofstream f(data_path(name), std::ios::binary);
