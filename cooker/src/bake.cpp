@@ -106,6 +106,10 @@ struct Baker {
   float eps = 0.0f;
   float extent = 0.0f;
   float output_step = 0.0f;
+  // Significance of the static group (base map, static indirect, static shadows): output_step, or
+  // one 8-bit step of the brightest static light's own peak where that is finer, so that a static
+  // light far dimmer than the semi-dynamic ones keeps 8 bits of its own when they are off.
+  float static_step = 0.0f;
   EmissiveLights emissive;
   std::vector<LightPlan> plans;  // parallel to Scene::lights
   bool indirect = false;
@@ -147,6 +151,16 @@ struct Baker {
       p.samples = (l.radius > 0.0f && l.type != LightType::kDirectional) ? area_samples : 1;
       plans.push_back(p);
     }
+    // The static lights' brightest peak at their authored colours (a lower bound of the base map's
+    // peak). Emissive surfaces are not in it: with no punctual static light the step stays.
+    float static_peak = 0.0f;
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+      const Light& l = scene.lights[i];
+      if (l.semi_dynamic) continue;
+      const float a = max3(l.color) * l.intensity;
+      if (a > 0.0f && std::isfinite(a)) static_peak = std::max(static_peak, own[i] * a);
+    }
+    static_step = static_peak > 0.0f ? std::min(output_step, static_peak / 255.0f) : output_step;
     indirect = o.indirect;
     plan = o.plan_effects;
     preset = indirect_preset(o);
@@ -263,7 +277,7 @@ struct Baker {
     std::vector<Emitter> emitters;
     if (li < 0) {
       emitters = static_emitters;
-      ind.threshold = output_step;
+      ind.threshold = static_step;
     } else {
       const Light& l = scene.lights[static_cast<size_t>(li)];
       emitters.push_back(light_emitter(l, glm::vec3(1.0f), scene.bounds_min, scene.bounds_max));
@@ -507,9 +521,13 @@ void fill_report_bake(Report& report, const Baker& b, Quality q, double seconds,
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& j = report.root()["bake"];
   j["output_step"] = b.output_step;
+  j["static_step"] = b.static_step;
   j["output_step_definition"] =
       "99th percentile over valid texels of the authored state's unshadowed direct irradiance "
       "(max channel) / 255";
+  j["static_step_definition"] =
+      "min(output_step, the brightest static light's peak unshadowed irradiance / 255): the "
+      "significance of the base map, static indirect light and static shadows";
   j["quality"] = quality_name(q);
   j["plan_effects"] = b.plan;
   j["area_samples"] = b.area_samples;
@@ -930,7 +948,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     maps.base = std::move(gm.map);
     for (size_t j = 0; j < cand.objects.size(); ++j) {
       const float peak = peak_of(gm.shadow[j], texels);
-      const float keep_at = kPairKeepFraction * b.output_step;
+      const float keep_at = kPairKeepFraction * b.static_step;
       const bool keep = !b.plan || peak > keep_at;
       report.add_decision("static shadow of object " + scene.objects[size_t(cand.objects[j])].name,
                           keep, b.plan ? keep_reason(peak, keep_at, "change") : kForced);
@@ -940,7 +958,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     // approximation, reported with their size.
     for (auto& [key, img] : gm.pairs) {
       const float peak = peak_of(img, texels);
-      if (peak <= kPairKeepFraction * b.output_step) continue;
+      if (peak <= kPairKeepFraction * b.static_step) continue;
       report.add_decision("static shadow overlap " +
                               scene.objects[size_t(cand.objects[size_t(key.first)])].name + " + " +
                               scene.objects[size_t(cand.objects[size_t(key.second)])].name,

@@ -111,6 +111,17 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     light_threshold[i] = half_step / authored[i];
     if (peak > 0.0f) light_threshold[i] = std::min(light_threshold[i], 0.5f * peak / 255.0f);
   }
+  // The base map and the static shadows: half a step at the authored exposure, or half a step of
+  // the base map's own peak where that is finer, so that static light far dimmer than the
+  // semi-dynamic lights is still there, to 8 bits, when they are off (the baker's static_step).
+  float base_threshold = half_step;
+  {
+    float peak = 0.0f;
+    for (float v : maps.base.data) {
+      if (std::isfinite(v)) peak = std::max(peak, v);
+    }
+    if (peak > 0.0f) base_threshold = std::min(base_threshold, 0.5f * peak / 255.0f);
+  }
   // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
   // those corners only; a tile also never exceeds an atlas (less its gutters).
   const int max_dim = std::min(options.max_atlas_size - 2, std::max(options.tile_size, 4));
@@ -119,7 +130,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     MapJob j;
     j.map = &maps.base;
     j.prototype.kind = kGroupBase;
-    j.threshold = half_step;
+    j.threshold = base_threshold;
     j.what = "base map";
     jobs.push_back(j);
   }
@@ -212,7 +223,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.map = &s.map;
     j.prototype.kind = kGroupStaticShadow;
     j.prototype.object = s.object;
-    j.threshold = half_step;  // absolute irradiance, like the base map
+    j.threshold = base_threshold;  // absolute irradiance, like the base map
     j.what = "static-light shadow map of object '" + scene.objects[size_t(s.object)].name + "'";
     check_map(s.map, layout, 3, 3, j.what);
     jobs.push_back(j);
@@ -421,9 +432,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["groups"] = c.groups.size();
   j["significance_rule"] =
       "a texel is significant when some channel exceeds half an 8-bit output step at the authored "
-      "exposure: 0.5 * output_step for the base map, 0.5 * output_step / a_l for C_l and S_ol "
-      "(a_l = authored max(colour) * intensity, floored at 1/100 of the brightest light), or "
-      "0.5 * peak(C_l) / 255 where that is smaller (a dim light alone keeps 8 bits of its own)";
+      "exposure: 0.5 * output_step for the base map and static shadows, 0.5 * output_step / a_l "
+      "for C_l and S_ol (a_l = authored max(colour) * intensity, floored at 1/100 of the "
+      "brightest light), or 0.5 * peak / 255 of the base map or C_l where that is smaller (dim "
+      "light alone keeps 8 bits of its own)";
   j["encoding"]["policy"] = options.encoding == EncodingPolicy::kAuto     ? "auto"
                             : options.encoding == EncodingPolicy::kLinear ? "linear"
                                                                           : "square";

@@ -48,6 +48,9 @@ struct BakedMaps {
   // C_l/S_ol (baked at intensity 1) the threshold is output_step / (authored max(colour) *
   // intensity), floored so that a light authored off or at 0 still keeps its patches, and at
   // most one 8-bit step of the light's own peak (so a very dim light recomposes alone to 8 bits).
+  // The base map and the static shadows take output_step, or one step of the static light's own
+  // peak where that is finer (static light far dimmer than the semi-dynamic lights survives them
+  // being switched off).
   float output_step = 0.0f;
   FloatImage base;                       // B, 3 channels
   std::vector<int> lights;               // Scene::lights index of each semi-dynamic light
