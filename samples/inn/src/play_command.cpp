@@ -13,20 +13,38 @@
 namespace lightpatch::inn {
 namespace {
 
-int usage() {
+// The options, to `out` (stdout for --help, stderr after a usage error).
+void print_help(std::FILE* out) {
   std::fprintf(
-      stderr,
-      "usage: lightpatch-inn play [--scene inn.glb] [--pack inn.lpk] [--size WxH] [--budget "
-      "TEXELS]\n"
-      "                           [--exposure F] [--drift-ulps F] [--cpu]\n"
-      "       lightpatch-inn play --headless [--script default|SCENARIO.json] --out DIR [same "
-      "options]\n"
-      "  defaults: --scene demo-out/inn.glb --pack demo-out/inn.lpk (what ./run demo makes);\n"
-      "  the budget is texels recomposed per frame (default: half the light map's area);\n"
-      "  --drift-ulps is the planner's drift tolerance (default 512).\n"
-      "  Window: W A S D walk, Shift runs, mouse or arrow keys look, E uses, Esc quits.\n"
-      "  Headless: plays the scenario beside the scene, writes screenshots, frames.csv,\n"
-      "  steps.csv and summary.json to DIR; exits 1 if a step fails.\n");
+      out,
+      "usage: lightpatch-inn play [--window] [--scene inn.glb] [--pack inn.lpk] [OPTIONS]\n"
+      "       lightpatch-inn play --headless [--script default|SCENARIO.json] --out DIR "
+      "[OPTIONS]\n"
+      "  Plays a generated inn from its cooked pack. In a window: W A S D walk, Shift runs,\n"
+      "  mouse or arrow keys look, E uses, Esc quits. Headless (EGL surfaceless): plays the\n"
+      "  scenario, writes screenshots, frames.csv, steps.csv and summary.json to DIR, and exits\n"
+      "  1 if a scripted step fails (a change misses its latency bound) or GL reports an error.\n"
+      "options:\n"
+      "  --window           play in a window (the default without --headless)\n"
+      "  --headless         play the scripted scenario offscreen; needs --out\n"
+      "  --script S         headless: 'default' (the OUT.scenario.json beside the scene) or a\n"
+      "                     scenario file (default: default)\n"
+      "  --out DIR          headless: where screenshots and records go (created)\n"
+      "  --scene PATH       the inn's glTF (default: demo-out/inn.glb, what ./run demo makes)\n"
+      "  --pack PATH        its cooked pack (default: demo-out/inn.lpk)\n"
+      "  --size WxH         frame size, 16..8192 each (default: 1280x720 windowed, 960x540\n"
+      "                     headless)\n"
+      "  --budget TEXELS    texels recomposed per frame (default: half the light map's area)\n"
+      "  --exposure F       multiplies the light map before tone mapping, > 0 (default: 1.5)\n"
+      "  --drift-ulps F     the planner's drift tolerance in half-float ulps, > 0; lower\n"
+      "                     rebuilds more often (default: 512)\n"
+      "  --cpu              recompose on the CPU reference path, as on devices without\n"
+      "                     half-float render targets (default: GLES when it can)\n"
+      "  -h, --help         this text\n");
+}
+
+int usage() {
+  print_help(stderr);
   return 2;
 }
 
@@ -65,7 +83,7 @@ int play_command(int argc, char** argv) {
     };
     const char* v = nullptr;
     if (a == "--help" || a == "-h") {
-      usage();
+      print_help(stdout);
       return 0;
     } else if (a == "--headless") {
       o.headless = true;
