@@ -623,12 +623,59 @@ ObjectChanges object_changes(const Baker& b, const Scene& scene, int li, const I
   return out;
 }
 
+// A map whose rows are allocated when first written. A shadow usually darkens a corner of the
+// light map: as dense images, a pass's candidates cost (objects x light map) of zeroed memory,
+// written and scanned again for each peak; this costs the rows they touch. Each row is written by
+// the one worker that traces it (parallel_for over rows), so allocation needs no lock.
+class SparseRows {
+ public:
+  SparseRows(int width, int height, int channels)
+      : width_(width), height_(height), channels_(channels), rows_(size_t(height)) {}
+
+  // Row y, zeros until written; y is the caller's own row.
+  float* row(int y) {
+    std::unique_ptr<float[]>& r = rows_[size_t(y)];
+    if (!r) r = std::make_unique<float[]>(size_t(width_) * size_t(channels_));
+    return r.get();
+  }
+  float at(size_t texel, int channel) const {
+    const std::unique_ptr<float[]>& r = rows_[texel / size_t(width_)];
+    return r ? r[(texel % size_t(width_)) * size_t(channels_) + size_t(channel)] : 0.0f;
+  }
+  // Largest |value| over valid texels.
+  float peak(const TexelSet& texels) const {
+    float peak = 0.0f;
+    for (int y = 0; y < height_; ++y) {
+      const float* r = rows_[size_t(y)].get();
+      if (!r) continue;
+      for (int x = 0; x < width_; ++x) {
+        if (!texels.valid[texels.index(x, y)]) continue;
+        for (int c = 0; c < channels_; ++c)
+          peak = std::max(peak, std::fabs(r[size_t(x) * size_t(channels_) + size_t(c)]));
+      }
+    }
+    return peak;
+  }
+  FloatImage dense() const {
+    FloatImage m(width_, height_, channels_);
+    const size_t n = size_t(width_) * size_t(channels_);
+    for (int y = 0; y < height_; ++y) {
+      if (rows_[size_t(y)]) std::copy_n(rows_[size_t(y)].get(), n, m.data.begin() + long(n) * y);
+    }
+    return m;
+  }
+
+ private:
+  int width_, height_, channels_;
+  std::vector<std::unique_ptr<float[]>> rows_;
+};
+
 // One light group's maps: its own (B for the static group, C_l for light l) and, per candidate
 // slot, what the object changes in it (S), and per pair of slots (a < b) the light both block,
 // which S_a + S_b removes twice (P).
 struct GroupMaps {
   FloatImage map;
-  std::vector<FloatImage> shadow;
+  std::vector<SparseRows> shadow;
   std::map<std::pair<int, int>, FloatImage> pairs;
   double doubly_blocked = 0.0;  // energy (max channel, summed over texels) blocked by 2 objects
   double triply_blocked = 0.0;  // ... by 3 or more
@@ -645,7 +692,8 @@ GroupMaps trace_group(const Baker& b, int li, const Indirect& ind, const Candida
   const int w = texels.width, h = texels.height;
   GroupMaps gm;
   gm.map = FloatImage(w, h, channels);
-  gm.shadow.assign(cand.sets.size(), FloatImage(w, h, channels));
+  gm.shadow.reserve(cand.sets.size());
+  for (size_t j = 0; j < cand.sets.size(); ++j) gm.shadow.emplace_back(w, h, channels);
   // Pair terms only in a pass over single objects (a joint pass measures them exactly).
   const bool singles = cand.sets.empty() || cand.sets.front().size() == 1;
   std::mutex pair_mutex;
@@ -765,9 +813,9 @@ GroupMaps trace_group(const Baker& b, int li, const Indirect& ind, const Candida
       for (const auto& [key, e] : p_acc) row_pairs.push_back({key, {x, e}});
       if (!any) continue;  // shadow maps start at zero: most texels touch none
       for (size_t j = 0; j < nc; ++j) {
-        for (int ch = 0; ch < channels; ++ch) {
-          if (s_acc[j][ch] != 0.0f) gm.shadow[j].at(x, y, ch) = s_acc[j][ch];
-        }
+        if (s_acc[j] == glm::vec3(0.0f)) continue;
+        float* r = gm.shadow[j].row(y) + size_t(x) * size_t(channels);
+        for (int ch = 0; ch < channels; ++ch) r[ch] = s_acc[j][ch];
       }
     }
     if (!row_pairs.empty() || doubly > 0.0 || triply > 0.0) {
@@ -947,12 +995,12 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     report.stage_time("bake.base_with_photons", seconds_since(ts));
     maps.base = std::move(gm.map);
     for (size_t j = 0; j < cand.objects.size(); ++j) {
-      const float peak = peak_of(gm.shadow[j], texels);
+      const float peak = gm.shadow[j].peak(texels);
       const float keep_at = kPairKeepFraction * b.static_step;
       const bool keep = !b.plan || peak > keep_at;
       report.add_decision("static shadow of object " + scene.objects[size_t(cand.objects[j])].name,
                           keep, b.plan ? keep_reason(peak, keep_at, "change") : kForced);
-      if (keep) maps.static_shadows.push_back({cand.objects[j], std::move(gm.shadow[j])});
+      if (keep) maps.static_shadows.push_back({cand.objects[j], gm.shadow[j].dense()});
     }
     // The pack has no static pair corrections: overlapping static shadows stay the paper's
     // approximation, reported with their size.
@@ -1013,7 +1061,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     std::vector<const FloatImage*> shadow_map_of(scene.objects.size(), nullptr);
     const size_t first_shadow = maps.shadows.size();
     for (size_t j = 0; j < cand.objects.size(); ++j) {
-      const float peak = peak_of(gm.shadow[j], texels);
+      const float peak = gm.shadow[j].peak(texels);
       const Object& obj = scene.objects[static_cast<size_t>(cand.objects[j])];
       const bool keep = !b.plan || peak > keep_at;
       shadow_kept[j] = keep ? 1 : 0;
@@ -1027,7 +1075,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
         ShadowMap sm;
         sm.light = static_cast<int>(k);
         sm.object = cand.objects[j];
-        sm.map = std::move(gm.shadow[j]);
+        sm.map = gm.shadow[j].dense();
         maps.shadows.push_back(std::move(sm));
       }
     }
@@ -1067,8 +1115,10 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
         const FloatImage& sa = *shadow_map_of[size_t(kept_pairs[j].object_a)];
         const FloatImage& sb = *shadow_map_of[size_t(kept_pairs[j].object_b)];
         FloatImage& p = kept_pairs[j].map;
+        const int ch = p.channels;
         for (size_t i = 0; i < p.data.size(); ++i)
-          p.data[i] = sa.data[i] + sb.data[i] - jm.shadow[j].data[i];
+          p.data[i] =
+              sa.data[i] + sb.data[i] - jm.shadow[j].at(i / size_t(ch), int(i % size_t(ch)));
       }
     }
     for (PairCorrectionMap& pc : kept_pairs) maps.pair_corrections.push_back(std::move(pc));
