@@ -133,13 +133,17 @@ struct Baker {
     float s_max = 0.0f;
     for (const Light& l : scene.lights) s_max = std::max(s_max, max3(l.color) * l.intensity);
     const std::vector<float> own = own_peaks();
+    // The static lights' brightest peak at their authored colours (a lower bound of the base map's
+    // peak). Emissive surfaces are not in it: with no punctual static light the step stays.
+    float static_peak = 0.0f;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
       const Light& l = scene.lights[i];
       LightPlan p;
       p.index = static_cast<int>(i);
       // A light authored dim (or at 0) is given the significance of a light 1/100 as bright as
       // the brightest, so that it keeps its patches when turned up at run time.
-      float s = std::max(max3(l.color) * l.intensity, 1e-2f * s_max);
+      const float a = max3(l.color) * l.intensity;
+      float s = std::max(a, 1e-2f * s_max);
       if (!(s > 0.0f)) s = 1.0f;
       p.threshold = output_step / s;
       // A semi-dynamic light may be the only one on: its significance is also at most one 8-bit
@@ -150,15 +154,8 @@ struct Baker {
       p.cutoff = kEarlyOutFraction * p.threshold;
       p.samples = (l.radius > 0.0f && l.type != LightType::kDirectional) ? area_samples : 1;
       plans.push_back(p);
-    }
-    // The static lights' brightest peak at their authored colours (a lower bound of the base map's
-    // peak). Emissive surfaces are not in it: with no punctual static light the step stays.
-    float static_peak = 0.0f;
-    for (size_t i = 0; i < scene.lights.size(); ++i) {
-      const Light& l = scene.lights[i];
-      if (l.semi_dynamic) continue;
-      const float a = max3(l.color) * l.intensity;
-      if (a > 0.0f && std::isfinite(a)) static_peak = std::max(static_peak, own[i] * a);
+      if (!l.semi_dynamic && a > 0.0f && std::isfinite(a))
+        static_peak = std::max(static_peak, own[i] * a);
     }
     static_step = static_peak > 0.0f ? std::min(output_step, static_peak / 255.0f) : output_step;
     indirect = o.indirect;

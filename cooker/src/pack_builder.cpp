@@ -34,6 +34,18 @@ float max3(const glm::vec3& v) {
   return std::max({v.x, v.y, v.z});
 }
 
+// A map's significance threshold: half an 8-bit step at the authored exposure (`at_authored`), or
+// half a step of the map's own peak where that is finer, so that a light far dimmer than the
+// others, or static light far dimmer than the semi-dynamic lights, still recomposes alone to 8
+// bits when the bright ones are off (the baker's rule, bake.cpp).
+float significance(const FloatImage& map, float at_authored) {
+  float peak = 0.0f;
+  for (float v : map.data) {
+    if (std::isfinite(v)) peak = std::max(peak, v);
+  }
+  return peak > 0.0f ? std::min(at_authored, 0.5f * peak / 255.0f) : at_authored;
+}
+
 nlohmann::json error_json(const EncodingError& e) {
   nlohmann::json j;
   j["relative_rmse"] = e.sum_sq_value > 0.0 ? std::sqrt(e.sum_sq_error / e.sum_sq_value) : 0.0;
@@ -99,29 +111,12 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
 
   const float half_step = 0.5f * maps.output_step;
-  // Significance of each light's maps (intensity 1): half an output step at its authored factor,
-  // or half a step of its own peak where that is finer, so that a light far dimmer than the
-  // others still recomposes alone to 8 bits (the baker's rule, bake.cpp).
+  // Significance of each light's maps (intensity 1, at its authored factor) and of the base map
+  // with the static shadows (absolute): bake.cpp's rule, see significance().
   std::vector<float> light_threshold(maps.lights.size());
-  for (size_t i = 0; i < maps.lights.size(); ++i) {
-    float peak = 0.0f;
-    for (float v : maps.contribution[i].data) {
-      if (std::isfinite(v)) peak = std::max(peak, v);
-    }
-    light_threshold[i] = half_step / authored[i];
-    if (peak > 0.0f) light_threshold[i] = std::min(light_threshold[i], 0.5f * peak / 255.0f);
-  }
-  // The base map and the static shadows: half a step at the authored exposure, or half a step of
-  // the base map's own peak where that is finer, so that static light far dimmer than the
-  // semi-dynamic lights is still there, to 8 bits, when they are off (the baker's static_step).
-  float base_threshold = half_step;
-  {
-    float peak = 0.0f;
-    for (float v : maps.base.data) {
-      if (std::isfinite(v)) peak = std::max(peak, v);
-    }
-    if (peak > 0.0f) base_threshold = std::min(base_threshold, 0.5f * peak / 255.0f);
-  }
+  for (size_t i = 0; i < maps.lights.size(); ++i)
+    light_threshold[i] = significance(maps.contribution[i], half_step / authored[i]);
+  const float base_threshold = significance(maps.base, half_step);
   // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
   // those corners only; a tile also never exceeds an atlas (less its gutters).
   const int max_dim = std::min(options.max_atlas_size - 2, std::max(options.tile_size, 4));
@@ -246,16 +241,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     if (j.prototype.kind == kGroupBase) return;
     for (SourcePatch& p : per_job[size_t(i)]) {
       if (p.channels != 3) continue;
-      float spread = 0.0f;
-      bool collapsed = false;
-      if (!options.keep_colour) {
-        collapsed = collapse_untinted(p, &spread);
-      } else {
-        for (size_t k = 0; k + 2 < p.values.size(); k += 3) {
-          const float* v = &p.values[k];
-          spread = std::max(spread, std::max({v[0], v[1], v[2]}) - std::min({v[0], v[1], v[2]}));
-        }
-      }
+      const float spread = colour_spread(p);
+      const bool collapsed = !options.keep_colour && collapse_untinted(p, spread);
       ColourDecision& d = colour[size_t(i)];
       (collapsed ? d.one : d.three)++;
       d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);

@@ -90,15 +90,19 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
   }
 }
 
-bool collapse_untinted(SourcePatch& patch, float* spread) {
-  *spread = 0.0f;
-  if (patch.channels != 3) return false;
-  const size_t n = patch.values.size() / 3;
-  for (size_t i = 0; i < n; ++i) {
-    const float* v = &patch.values[3 * i];
-    *spread = std::max(*spread, std::max({v[0], v[1], v[2]}) - std::min({v[0], v[1], v[2]}));
+float colour_spread(const SourcePatch& patch) {
+  float spread = 0.0f;
+  if (patch.channels != 3) return spread;
+  for (size_t i = 0; i + 2 < patch.values.size(); i += 3) {
+    const float* v = &patch.values[i];
+    spread = std::max(spread, std::max({v[0], v[1], v[2]}) - std::min({v[0], v[1], v[2]}));
   }
-  if (*spread > patch.threshold) return false;
+  return spread;
+}
+
+bool collapse_untinted(SourcePatch& patch, float spread) {
+  if (patch.channels != 3 || spread > patch.threshold) return false;
+  const size_t n = patch.values.size() / 3;
   std::vector<float> grey(n);
   for (size_t i = 0; i < n; ++i) {
     const float* v = &patch.values[3 * i];

@@ -38,10 +38,13 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
                      int max_dim, const SourcePatch& prototype, const std::string& what,
                      std::vector<SourcePatch>& out);
 
+// The largest max - min over a 3-channel patch's texels (its tint); 0 for other patches.
+float colour_spread(const SourcePatch& patch);
+
 // Colour decision for a 3-channel patch (bounce light tinted by albedos): where every texel's
 // channels lie within `threshold` of each other (max - min), the tint is below the 8-bit step
 // and the patch becomes one channel holding (max + min) / 2, within threshold / 2 of every
-// channel. Returns true if it collapsed; `spread` receives the patch's largest max - min.
-bool collapse_untinted(SourcePatch& patch, float* spread);
+// channel. `spread` is colour_spread(patch). Returns true if it collapsed.
+bool collapse_untinted(SourcePatch& patch, float spread);
 
 }  // namespace lightpatch::cooker

@@ -280,13 +280,21 @@ std::vector<Setting> make_sweep(const AccuracyOptions& o, bool has_area_lights, 
     x.label = true;
     return x;
   };
-  auto encoding = [&](Quality q, EncodingPolicy e) {
+  // One knob turned from preset q, the others at q's values; unlabelled on the plot.
+  auto turned = [&](Quality q, const std::string& name, const char* series) {
     Setting x = preset(q);
-    x.name = std::string("encoding=") + (e == EncodingPolicy::kLinear ? "linear" : "square") +
-             " (" + quality_name(q) + ")";
-    x.knob = "encoding";
-    x.encoding = e;
+    x.name = name;
+    x.knob = series;
     x.label = false;
+    return x;
+  };
+  auto encoding = [&](Quality q, EncodingPolicy e) {
+    Setting x =
+        turned(q,
+               std::string("encoding=") + (e == EncodingPolicy::kLinear ? "linear" : "square") +
+                   " (" + quality_name(q) + ")",
+               "encoding");
+    x.encoding = e;
     return x;
   };
   if (o.quick) {
@@ -300,43 +308,32 @@ std::vector<Setting> make_sweep(const AccuracyOptions& o, bool has_area_lights, 
     s.push_back(preset(q));
   }
   // Each knob swept around the preview preset, the others at preview's values.
+  const Quality p = Quality::kPreview;
   for (int n : {10000, 30000, 60000, 250000, 500000}) {
-    Setting x = preset(Quality::kPreview);
-    x.name = "photons=" + std::to_string(n);
-    x.knob = "photons";
-    x.label = false;
+    Setting x = turned(p, "photons=" + std::to_string(n), "photons");
     x.bake.photons = n;
     s.push_back(x);
   }
   for (int n : {64, 192, 1024, 2048, 4096}) {
-    Setting x = preset(Quality::kPreview);
-    x.name = "virtual_lights=" + std::to_string(n);
-    x.knob = "virtual lights";
-    x.label = false;
+    Setting x = turned(p, "virtual_lights=" + std::to_string(n), "virtual lights");
     x.bake.virtual_lights = n;
     s.push_back(x);
   }
   if (has_area_lights) {
     for (int n : {1, 4, 32, 64}) {
-      Setting x = preset(Quality::kPreview);
-      x.name = "area_samples=" + std::to_string(n);
-      x.knob = "area samples";
-      x.label = false;
+      Setting x = turned(p, "area_samples=" + std::to_string(n), "area samples");
       x.bake.area_samples = n;
       s.push_back(x);
     }
   }
   for (int size : {base_size / 4, base_size / 2}) {
     if (size < 8) continue;
-    Setting x = preset(Quality::kPreview);
-    x.name = "lightmap_size=" + std::to_string(size);
-    x.knob = "texel density";
-    x.label = false;
+    Setting x = turned(p, "lightmap_size=" + std::to_string(size), "texel density");
     x.lightmap_size = size;
     s.push_back(x);
   }
   for (EncodingPolicy e : {EncodingPolicy::kLinear, EncodingPolicy::kSquare}) {
-    s.push_back(encoding(Quality::kPreview, e));
+    s.push_back(encoding(p, e));
   }
   return s;
 }

@@ -172,16 +172,19 @@ std::string base64(const std::vector<std::uint8_t>& data) {
   return out;
 }
 
-scenegen::SceneBuilder small_room(float lamp_radius) {
+namespace {
+
+// The small room from its three meshes: a grey floor and pillar, a semi-dynamic wooden crate, a
+// semi-dynamic point lamp (of `lamp_radius` metres) and a static spot.
+scenegen::SceneBuilder room_of(const scenegen::Geometry& floor, const scenegen::Geometry& pillar,
+                               const scenegen::Geometry& crate, float lamp_radius) {
   using namespace scenegen;
   SceneBuilder b;
   const int grey = b.add_material({.name = "grey", .base_color = {0.6f, 0.6f, 0.6f, 1.0f}});
   const int wood = b.add_material({.name = "wood", .base_color = {0.5f, 0.3f, 0.2f, 1.0f}});
-  b.add_mesh_node("floor", make_plane(4.0f, 4.0f, 2, 2), grey);
-  b.add_mesh_node("pillar", make_box({-0.2f, 0.0f, -0.2f}, {0.2f, 1.0f, 0.2f}), grey,
-                  {1.2f, 0.0f, 1.2f});
-  b.add_mesh_node("crate", make_box({-0.25f, 0.0f, -0.25f}, {0.25f, 0.5f, 0.25f}), wood,
-                  {-0.5f, 0.0f, 0.3f}, /*semi_dynamic=*/true);
+  b.add_mesh_node("floor", floor, grey);
+  b.add_mesh_node("pillar", pillar, grey, {1.2f, 0.0f, 1.2f});
+  b.add_mesh_node("crate", crate, wood, {-0.5f, 0.0f, 0.3f}, /*semi_dynamic=*/true);
   b.add_light_node(
       "lamp",
       {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.9f, 0.8f}, .intensity = 6.0f},
@@ -195,8 +198,6 @@ scenegen::SceneBuilder small_room(float lamp_radius) {
                    {1.0f, 2.5f, -1.0f}, {-0.2f, -1.0f, 0.3f});
   return b;
 }
-
-namespace {
 
 // Gives each 4-vertex face of `g` (make_box / make_plane with one subdivision: vertices in the
 // order (0,0) (1,0) (0,1) (1,1) of the face) a cell of a 4 x 4 grid, starting at cell `*next`.
@@ -215,11 +216,14 @@ void grid_uv1(scenegen::Geometry& g, int* next) {
 
 }  // namespace
 
+scenegen::SceneBuilder small_room(float lamp_radius) {
+  using namespace scenegen;
+  return room_of(make_plane(4.0f, 4.0f, 2, 2), make_box({-0.2f, 0.0f, -0.2f}, {0.2f, 1.0f, 0.2f}),
+                 make_box({-0.25f, 0.0f, -0.25f}, {0.25f, 0.5f, 0.25f}), lamp_radius);
+}
+
 scenegen::SceneBuilder small_room_with_uv1() {
   using namespace scenegen;
-  SceneBuilder b;
-  const int grey = b.add_material({.name = "grey", .base_color = {0.6f, 0.6f, 0.6f, 1.0f}});
-  const int wood = b.add_material({.name = "wood", .base_color = {0.5f, 0.3f, 0.2f, 1.0f}});
   int next = 0;
   Geometry floor = make_plane(4.0f, 4.0f);
   Geometry pillar = make_box({-0.2f, 0.0f, -0.2f}, {0.2f, 1.0f, 0.2f});
@@ -227,21 +231,7 @@ scenegen::SceneBuilder small_room_with_uv1() {
   grid_uv1(floor, &next);
   grid_uv1(pillar, &next);
   grid_uv1(crate, &next);
-  b.add_mesh_node("floor", floor, grey);
-  b.add_mesh_node("pillar", pillar, grey, {1.2f, 0.0f, 1.2f});
-  b.add_mesh_node("crate", crate, wood, {-0.5f, 0.0f, 0.3f}, /*semi_dynamic=*/true);
-  b.add_light_node(
-      "lamp",
-      {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.9f, 0.8f}, .intensity = 6.0f},
-      {-0.3f, 1.6f, 0.2f}, {0, -1, 0}, /*semi_dynamic=*/true);
-  b.add_light_node("spot",
-                   {.name = "spot",
-                    .type = LightType::kSpot,
-                    .intensity = 10.0f,
-                    .inner_cone_angle = 0.3f,
-                    .outer_cone_angle = 0.6f},
-                   {1.0f, 2.5f, -1.0f}, {-0.2f, -1.0f, 0.3f});
-  return b;
+  return room_of(floor, pillar, crate, 0.0f);
 }
 
 }  // namespace lightpatch::test

@@ -37,6 +37,19 @@ int segs(const Detail& d, int full) {
   return std::max(6, full * d.round_segments / 16);
 }
 
+// A dinner plate, 24 cm across (lathed; on the table and standing on the dresser's shelves).
+Geometry make_plate(const Detail& d) {
+  return make_lathe({{0, 0},
+                     {0.07f, 0},
+                     {0.07f, 0},
+                     {0.11f, 0.015f},
+                     {0.12f, 0.02f},
+                     {0.115f, 0.022f},
+                     {0.06f, 0.008f},
+                     {0, 0.008f}},
+                    segs(d, 24));
+}
+
 }  // namespace
 
 std::uint64_t Rng::next() {
@@ -106,15 +119,7 @@ void add_chair(Parts& p, const Detail& d, const glm::mat4& m) {
 }
 
 void add_place_setting(Parts& p, const Detail& d, const glm::mat4& m) {
-  const Geometry plate = make_lathe({{0, 0},
-                                     {0.07f, 0},
-                                     {0.07f, 0},
-                                     {0.11f, 0.015f},
-                                     {0.12f, 0.02f},
-                                     {0.115f, 0.022f},
-                                     {0.06f, 0.008f},
-                                     {0, 0.008f}},
-                                    segs(d, 24));
+  const Geometry plate = make_plate(d);
   p.add(kCeramic, plate, m);
   const Geometry cup = make_lathe({{0, 0},
                                    {0.035f, 0},
@@ -281,15 +286,7 @@ void add_cupboard(Parts& p, const Detail& d, Rng& rng, const glm::mat4& m, float
   p.add(kWoodDark, make_box({-w / 2, 0.9f, 0}, {w / 2, h, 0.02f}), m);
   p.add(kWoodDark, rbox(d, {-w / 2, 0.9f, 0}, {-w / 2 + t, h, 0.3f}, 0.005f), m);
   p.add(kWoodDark, rbox(d, {w / 2 - t, 0.9f, 0}, {w / 2, h, 0.3f}, 0.005f), m);
-  const Geometry plate = make_lathe({{0, 0},
-                                     {0.07f, 0},
-                                     {0.07f, 0},
-                                     {0.11f, 0.015f},
-                                     {0.12f, 0.02f},
-                                     {0.115f, 0.022f},
-                                     {0.06f, 0.008f},
-                                     {0, 0.008f}},
-                                    segs(d, 24));
+  const Geometry plate = make_plate(d);
   for (int s = 0; s < 3; ++s) {
     const float y = 0.9f + 0.04f + static_cast<float>(s) * (h - 0.95f) / 3.0f;
     p.add(kWoodDark, rbox(d, {-w / 2 + t, y - 0.03f, 0.02f}, {w / 2 - t, y, 0.3f}, 0.005f), m);
