@@ -66,11 +66,8 @@ void add_plan_measurement(json& planned, const json& forced) {
   plan["forced"] = run_summary(forced);
   const json& p = plan["planned"];
   const json& f = plan["forced"];
-  plan["saved"] = {{"seconds", f["seconds"].get<double>() - p["seconds"].get<double>()},
-                   {"rays", f["rays"].get<double>() - p["rays"].get<double>()},
-                   {"pack_bytes", f["pack_bytes"].get<double>() - p["pack_bytes"].get<double>()},
-                   {"atlas_bytes", f["atlas_bytes"].get<double>() - p["atlas_bytes"].get<double>()},
-                   {"patches", f["patches"].get<double>() - p["patches"].get<double>()}};
+  for (const char* k : {"seconds", "rays", "pack_bytes", "atlas_bytes", "patches"})
+    plan["saved"][k] = f[k].get<double>() - p[k].get<double>();
   const std::pair<const char*, const char*> categories[] = {
       {"pairs", "pair "},
       {"overlap_corrections", "overlap correction "},
@@ -87,12 +84,13 @@ void add_plan_measurement(json& planned, const json& forced) {
 
   // Per light group: its whole pass in each run.
   const json none = json::object();
-  const json& pg = planned.contains("bake") && planned["bake"].contains("group_seconds")
-                       ? planned["bake"]["group_seconds"]
-                       : none;
-  const json& fg = forced.contains("bake") && forced["bake"].contains("group_seconds")
-                       ? forced["bake"]["group_seconds"]
-                       : none;
+  auto group_seconds = [&](const json& root) -> const json& {
+    return root.contains("bake") && root["bake"].contains("group_seconds")
+               ? root["bake"]["group_seconds"]
+               : none;
+  };
+  const json& pg = group_seconds(planned);
+  const json& fg = group_seconds(forced);
   json groups = json::array();
   for (const auto& [group, seconds] : fg.items()) {
     const double before = pg.contains(group) ? pg[group].get<double>() : 0.0;
