@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "direct_light.h"
+#include "surface_albedo.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -342,35 +343,6 @@ PhotonGroup::PhotonGroup(const Scene& scene, const Tracer& tracer, std::vector<E
   for (size_t i = 0; i < lights_.size(); ++i) bound_[i] = std::max(max3(lights_[i].power), mean);
 }
 
-glm::vec3 PhotonGroup::albedo_at(const Hit& h) const {
-  const MeshInstance& mesh = scene_.meshes[static_cast<size_t>(h.mesh)];
-  glm::vec3 a(0.8f);
-  if (mesh.material >= 0 && static_cast<size_t>(mesh.material) < scene_.materials.size()) {
-    const Material& m = scene_.materials[static_cast<size_t>(mesh.material)];
-    a = m.albedo;
-    if (m.albedo_texture >= 0 && static_cast<size_t>(m.albedo_texture) < scene_.textures.size() &&
-        !mesh.uv0.empty()) {
-      const Texture& tex = scene_.textures[static_cast<size_t>(m.albedo_texture)];
-      const size_t i0 = mesh.indices[3 * static_cast<size_t>(h.triangle)];
-      const size_t i1 = mesh.indices[3 * static_cast<size_t>(h.triangle) + 1];
-      const size_t i2 = mesh.indices[3 * static_cast<size_t>(h.triangle) + 2];
-      const glm::vec2 uv =
-          mesh.uv0[i0] * (1.0f - h.u - h.v) + mesh.uv0[i1] * h.u + mesh.uv0[i2] * h.v;
-      if (tex.width > 0 && tex.height > 0 && std::isfinite(uv.x) && std::isfinite(uv.y) &&
-          tex.linear_rgb.size() == size_t(tex.width) * size_t(tex.height)) {
-        const float fx = uv.x - std::floor(uv.x), fy = uv.y - std::floor(uv.y);
-        const int x = std::min(tex.width - 1, static_cast<int>(fx * static_cast<float>(tex.width)));
-        const int y =
-            std::min(tex.height - 1, static_cast<int>(fy * static_cast<float>(tex.height)));
-        a *= tex.linear_rgb[size_t(y) * size_t(tex.width) + size_t(x)];
-      }
-    }
-  }
-  // An albedo above 1 would create energy; NaN reflects nothing.
-  for (int c = 0; c < 3; ++c) a[c] = a[c] > 0.0f ? std::min(a[c], 1.0f) : 0.0f;
-  return a;
-}
-
 void PhotonGroup::trace_path(uint32_t path, Trace& out) const {
   const uint64_t h0 = sample_hash(seed_, path, 0, kEmit);
   const float u = (static_cast<float>(path) + unit(h0)) / static_cast<float>(emitted_);
@@ -461,7 +433,7 @@ void PhotonGroup::trace_path(uint32_t path, Trace& out) const {
     if (glm::dot(n, dir) > 0.0f) n = -n;
     const glm::vec3 pos = origin + dir * h.t;
     const glm::vec3 incident = range > 0.0f ? power * range_window(range, h.t) : power;
-    const glm::vec3 albedo = albedo_at(h);
+    const glm::vec3 albedo = surface_albedo(scene_, h);
     const glm::vec3 reflected = incident * albedo;
     if (max3(reflected) > 0.0f) {
       s.deposit = static_cast<int32_t>(out.deposits.size());
@@ -506,7 +478,7 @@ bool PhotonGroup::continue_path(uint32_t path, const Segment& s,
     glm::vec3 n = h.geometric_normal;
     if (glm::dot(n, dir) > 0.0f) n = -n;
     const glm::vec3 pos = origin + dir * h.t;
-    const glm::vec3 albedo = albedo_at(h);
+    const glm::vec3 albedo = surface_albedo(scene_, h);
     const glm::vec3 reflected = power * albedo;
     const int obj = scene_.meshes[static_cast<size_t>(h.mesh)].object;
     if (max3(reflected) > 0.0f) {

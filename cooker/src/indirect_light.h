@@ -127,7 +127,6 @@ class PhotonGroup {
                      std::vector<int>& objects_hit) const;
   Hit intersect_present(const glm::vec3& o, const glm::vec3& d, float tmin, float tmax,
                         const std::vector<uint8_t>& present) const;
-  glm::vec3 albedo_at(const Hit& h) const;
   int assign(const glm::vec3& p, const glm::vec3& n) const;  // nearest seed of similar normal
 
   const Scene& scene_;
