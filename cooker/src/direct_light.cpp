@@ -26,21 +26,6 @@ void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
   b = glm::vec3(c, sign + w.y * w.y * a, -w.y);
 }
 
-// Shirley-Chiu concentric map of [0,1)^2 onto the unit disc (keeps strata compact).
-glm::vec2 concentric_disc(float u, float v) {
-  const float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f;
-  if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
-  float r, phi;
-  if (std::fabs(a) > std::fabs(b)) {
-    r = a;
-    phi = (kPi / 4.0f) * (b / a);
-  } else {
-    r = b;
-    phi = (kPi / 2.0f) - (kPi / 4.0f) * (a / b);
-  }
-  return glm::vec2(r * std::cos(phi), r * std::sin(phi));
-}
-
 }  // namespace
 
 uint64_t sample_hash(uint64_t seed, uint64_t texel, uint64_t light, uint64_t sample) {
@@ -130,6 +115,78 @@ float light_reach(const Light& light, float cutoff) {
   return reach + light.radius;
 }
 
+bool view_sphere_light(const Light& light, const glm::vec3& p, SphereView* view) {
+  const float r = light.radius;
+  if (light.type == LightType::kDirectional || !(r > 0.0f)) return false;
+  const glm::vec3 to_centre = light.position - p;
+  const float d = glm::length(to_centre);
+  SphereView v;
+  v.radius = r;
+  v.distance = d;
+  // Spot and range act on the direction and distance from the centre to the receiver (at the
+  // centre itself the light's own direction).
+  const glm::vec3 from_centre = d > 0.0f ? -to_centre / d : light.direction;
+  float scale = range_window(light.range, d);
+  if (light.type == LightType::kSpot) scale *= spot_attenuation(light, from_centre);
+  v.radiance = scale / (kPi * r * r);
+  if (!(v.radiance > 0.0f) || !std::isfinite(v.radiance)) return false;
+  if (d > r) {
+    v.axis = to_centre / d;
+    const float s2 = (r / d) * (r / d);  // sin^2 of the cone's half angle
+    v.cos_max = std::sqrt(std::max(0.0f, 1.0f - s2));
+    v.one_minus_cos = s2 / (1.0f + v.cos_max);
+  } else {
+    v.axis = d > 0.0f ? to_centre / d : glm::vec3(0.0f, 0.0f, 1.0f);
+    v.cos_max = -1.0f;  // inside: the sphere fills every direction
+    v.one_minus_cos = 2.0f;
+  }
+  *view = v;
+  return true;
+}
+
+glm::vec3 sample_sphere_view(const SphereView& view, float u, float v, float* t_surface) {
+  // cos = 1 - u (1 - cos_max); sin^2 = (1 - cos)(1 + cos) keeps small cones exact.
+  const float a = u * view.one_minus_cos;
+  const float c = 1.0f - a;
+  const float s = std::sqrt(std::max(0.0f, a * (2.0f - a)));
+  const float phi = 2.0f * kPi * v;
+  glm::vec3 t, b;
+  basis(view.axis, t, b);
+  const glm::vec3 dir =
+      glm::normalize(t * (s * std::cos(phi)) + b * (s * std::sin(phi)) + view.axis * c);
+  // Along dir the centre is at projection d c and off-axis distance d s.
+  const float d = view.distance, r = view.radius;
+  const float h2 = std::max(0.0f, r * r - d * d * s * s);
+  const float near = d * c - std::sqrt(h2);
+  *t_surface = near > 0.0f ? near : d * c + std::sqrt(h2);  // inside: the far side
+  return dir;
+}
+
+float sphere_hit_distance(const glm::vec3& p, const glm::vec3& dir, const glm::vec3& centre,
+                          float radius) {
+  const glm::vec3 oc = centre - p;
+  const float tc = glm::dot(oc, dir);
+  const float q2 = glm::dot(oc, oc) - tc * tc;  // squared distance of the centre from the ray
+  const float h2 = radius * radius - q2;
+  if (!(h2 >= 0.0f)) return -1.0f;
+  const float h = std::sqrt(h2);
+  if (tc - h > 0.0f) return tc - h;
+  if (tc + h > 0.0f) return tc + h;
+  return -1.0f;
+}
+
+float sphere_cosine_integral(float cos_theta, float sin2_sigma) {
+  const float s2 = std::clamp(sin2_sigma, 0.0f, 1.0f);
+  const float c = std::clamp(cos_theta, -1.0f, 1.0f);
+  if (c * c >= s2) return c > 0.0f ? kPi * s2 * c : 0.0f;  // wholly above or below the horizon
+  const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - c * c));
+  const float x = std::sqrt(std::max(0.0f, 1.0f / s2 - 1.0f));  // cot sigma
+  const float y = std::clamp(-x * c / sin_theta, -1.0f, 1.0f);
+  const float sy = sin_theta * std::sqrt(std::max(0.0f, 1.0f - y * y));
+  const float e = (c * std::acos(y) - x * sy) * s2 + std::atan2(sy, x);
+  return std::max(0.0f, e);
+}
+
 bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n, int samples,
                      uint64_t rng, float eps, float extent, float cutoff,
                      std::vector<LightSample>& out) {
@@ -153,7 +210,7 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
   const float bound = range_window(light.range, nearest) / (nearest * nearest + eps2);
   if (bound < cutoff) return false;
   const Cone cone(light);
-  if (r <= 0.0f || samples <= 1) {
+  if (r <= 0.0f) {
     const float e = irradiance_with_cone(light, cone, light.position, p, n, eps2);
     if (e <= 0.0f || e < cutoff) return false;
     const glm::vec3 to_l = light.position - origin;
@@ -162,26 +219,41 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
     out.push_back({origin, to_l / dl, eps, dl - eps, glm::vec3(e)});
     return true;
   }
-  // A sphere light seen from p: its facing disc, stratified g x g and jittered per texel.
+  SphereView view;
+  if (!view_sphere_light(light, p, &view)) return false;
+  if (samples <= 1) {
+    // The exact unshadowed irradiance, its visibility from one ray towards the centre.
+    const float cos_theta = d > 0.0f ? glm::dot(n, to_light / d) : 1.0f;
+    const float s2 = d > r ? (r / d) * (r / d) : 1.0f;
+    const float e =
+        d > r ? view.radiance * sphere_cosine_integral(cos_theta, s2) : view.radiance * kPi;
+    if (e <= 0.0f || e < cutoff) return false;
+    const glm::vec3 to_l = light.position - origin;
+    const float dl = glm::length(to_l);
+    // Inside the sphere nothing stands between the receiver and the light.
+    const float reach = std::max(eps, dl - r);
+    out.push_back({origin, dl > 0.0f ? to_l / dl : n, eps, reach, glm::vec3(e)});
+    return true;
+  }
+  // The visible cone, stratified g x g (cos by u, angle by v) and jittered per texel; each sample
+  // brings L cos(n, w) Omega / count.
   const int g = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples))));
   const int count = g * g;
-  const glm::vec3 w = d > 0.0f ? to_light / d : n;
-  glm::vec3 t, b;
-  basis(w, t, b);
+  const float per_sample = view.radiance * view.solid_angle() / static_cast<float>(count);
   const size_t first = out.size();
   float total = 0.0f;
   for (int i = 0; i < count; ++i) {
     const uint64_t h = sample_hash(rng, 0, 0, static_cast<uint64_t>(i));
     const float u = (static_cast<float>(i % g) + hash_to_unit(h)) / static_cast<float>(g);
     const float v = (static_cast<float>(i / g) + hash_to_unit(splitmix(h))) / static_cast<float>(g);
-    const glm::vec2 q = concentric_disc(u, v) * r;
-    const glm::vec3 sp = light.position + t * q.x + b * q.y;
-    const float e = irradiance_with_cone(light, cone, sp, p, n, eps2) / static_cast<float>(count);
-    if (e <= 0.0f) continue;
-    const glm::vec3 to_s = sp - origin;
+    float t_surface = 0.0f;
+    const glm::vec3 w = sample_sphere_view(view, u, v, &t_surface);
+    const float e = per_sample * glm::dot(n, w);
+    if (!(e > 0.0f)) continue;
+    const glm::vec3 to_s = p + w * t_surface - origin;
     const float ds = glm::length(to_s);
-    if (!(ds > 2.0f * eps)) continue;
-    out.push_back({origin, to_s / ds, eps, ds - eps, glm::vec3(e)});
+    // A surface point inside the sphere has nothing to trace.
+    out.push_back({origin, ds > 0.0f ? to_s / ds : w, eps, std::max(eps, ds - eps), glm::vec3(e)});
     total += e;
   }
   if (total <= 0.0f || total < cutoff) {
@@ -194,12 +266,16 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
 EmissiveLights::EmissiveLights(const Scene& scene) {
   double total = 0.0;
   std::vector<double> power;
-  for (const MeshInstance& mesh : scene.meshes) {
+  mesh_first_.assign(scene.meshes.size(), -1);
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    const MeshInstance& mesh = scene.meshes[mi];
     if (mesh.object >= 0) continue;  // semi-dynamic emitters are not baked as lights
     if (mesh.material < 0 || static_cast<size_t>(mesh.material) >= scene.materials.size()) continue;
     const glm::vec3 L = scene.materials[static_cast<size_t>(mesh.material)].emissive;
     const float peak = std::max({L.x, L.y, L.z});
     if (!(peak > 0.0f) || !std::isfinite(peak)) continue;
+    mesh_first_[mi] = static_cast<int32_t>(tri_of_.size());
+    tri_of_.resize(tri_of_.size() + mesh.indices.size() / 3, -1);
     for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
       const uint32_t a = mesh.indices[i], bb = mesh.indices[i + 1], c = mesh.indices[i + 2];
       Tri tri;
@@ -217,6 +293,7 @@ EmissiveLights::EmissiveLights(const Scene& scene) {
         if (glm::dot(sn, tri.normal) < 0.0f) tri.normal = -tri.normal;
       }
       tri.radiance = L;
+      tri_of_[static_cast<size_t>(mesh_first_[mi]) + i / 3] = static_cast<int32_t>(tris_.size());
       tris_.push_back(tri);
       total += static_cast<double>(peak) * tri.area;
       power.push_back(total);
@@ -263,6 +340,41 @@ void EmissiveLights::sample(const glm::vec3& p, const glm::vec3& n, int samples,
     const float g = cos_a * cos_b * area_per_sample / (d2 + area_per_sample / kPi);
     out.push_back({origin, dir, eps, d - 2.0f * eps, tri.radiance * g});
   }
+}
+
+EmissiveLights::Point EmissiveLights::emitter(int i) const {
+  const Tri& tri = tris_[static_cast<size_t>(i)];
+  const float p_tri =
+      cdf_[static_cast<size_t>(i)] - (i > 0 ? cdf_[static_cast<size_t>(i) - 1] : 0.0f);
+  Point pt;
+  pt.position = tri.p0;
+  pt.normal = tri.normal;
+  pt.radiance = tri.radiance;
+  pt.pdf_area = p_tri / tri.area;
+  return pt;
+}
+
+EmissiveLights::Point EmissiveLights::sample_point(float u0, float u1, float u2) const {
+  if (tris_.empty()) return Point{};
+  const size_t k =
+      std::min(cdf_.size() - 1,
+               static_cast<size_t>(std::upper_bound(cdf_.begin(), cdf_.end(), u0) - cdf_.begin()));
+  Point pt = emitter(static_cast<int>(k));
+  if (u1 + u2 > 1.0f) {
+    u1 = 1.0f - u1;
+    u2 = 1.0f - u2;
+  }
+  const Tri& tri = tris_[k];
+  pt.position = tri.p0 + tri.e1 * u1 + tri.e2 * u2;
+  return pt;
+}
+
+int EmissiveLights::find(int mesh, int triangle) const {
+  if (mesh < 0 || static_cast<size_t>(mesh) >= mesh_first_.size() || triangle < 0) return -1;
+  const int32_t first = mesh_first_[static_cast<size_t>(mesh)];
+  if (first < 0) return -1;
+  const size_t at = static_cast<size_t>(first) + static_cast<size_t>(triangle);
+  return at < tri_of_.size() ? tri_of_[at] : -1;
 }
 
 }  // namespace lightpatch::cooker
