@@ -479,23 +479,6 @@ std::string light_name(const Scene& scene, int li) {
   return n.empty() ? "light#" + std::to_string(li) : n;
 }
 
-void check_inputs(const Scene& scene, const TexelSet& texels) {
-  const size_t n = size_t(std::max(0, texels.width)) * size_t(std::max(0, texels.height));
-  if (texels.width <= 0 || texels.height <= 0 || texels.position.size() != n ||
-      texels.normal.size() != n || texels.valid.size() != n) {
-    throw CookError("bake: inconsistent texel set");
-  }
-  for (const Light& l : scene.lights) {
-    const bool finite = std::isfinite(l.intensity) && std::isfinite(max3(l.color)) &&
-                        std::isfinite(l.position.x + l.position.y + l.position.z) &&
-                        std::isfinite(l.direction.x + l.direction.y + l.direction.z) &&
-                        std::isfinite(l.range) && std::isfinite(l.radius);
-    if (!finite || l.intensity < 0.0f || std::min({l.color.x, l.color.y, l.color.z}) < 0.0f) {
-      throw CookError("light '" + l.name + "' has a negative or non-finite value");
-    }
-  }
-}
-
 void add_indirect_report(Report& report, const std::string& group, const Indirect& ind) {
   nlohmann::json g = {{"group", group}, {"enabled", ind.enabled}, {"reason", ind.reason}};
   if (ind.photons) {
@@ -874,6 +857,23 @@ void group_time(Report& report, const std::string& group, double seconds) {
 
 }  // namespace
 
+void check_bake_inputs(const Scene& scene, const TexelSet& texels) {
+  const size_t n = size_t(std::max(0, texels.width)) * size_t(std::max(0, texels.height));
+  if (texels.width <= 0 || texels.height <= 0 || texels.position.size() != n ||
+      texels.normal.size() != n || texels.valid.size() != n) {
+    throw CookError("bake: inconsistent texel set");
+  }
+  for (const Light& l : scene.lights) {
+    const bool finite = std::isfinite(l.intensity) && std::isfinite(max3(l.color)) &&
+                        std::isfinite(l.position.x + l.position.y + l.position.z) &&
+                        std::isfinite(l.direction.x + l.direction.y + l.direction.z) &&
+                        std::isfinite(l.range) && std::isfinite(l.radius);
+    if (!finite || l.intensity < 0.0f || std::min({l.color.x, l.color.y, l.color.z}) < 0.0f) {
+      throw CookError("light '" + l.name + "' has a negative or non-finite value");
+    }
+  }
+}
+
 const char* quality_name(Quality q) {
   switch (q) {
     case Quality::kDraft:
@@ -906,7 +906,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
                     const Tracer& tracer, const BakeOptions& options, Progress& progress,
                     Report& report) {
   (void)layout;
-  check_inputs(scene, texels);
+  check_bake_inputs(scene, texels);
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t rays0 = tracer.rays_traced();
   progress.begin("plan", 1);
@@ -1147,47 +1147,10 @@ FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& 
                       const Tracer& tracer, const StateSpec& state, const BakeOptions& options,
                       Progress& progress, Report& report) {
   (void)layout;
-  check_inputs(scene, texels);
-  // Resolve the state by name.
-  std::vector<glm::vec3> radiant(scene.lights.size());  // colour * intensity, 0 when off
-  for (size_t i = 0; i < scene.lights.size(); ++i) {
-    radiant[i] = scene.lights[i].color * scene.lights[i].intensity;
-  }
-  std::vector<std::string> unknown;
-  for (const auto& [name, o] : state.lights) {
-    size_t i = 0;
-    while (i < scene.lights.size() && scene.lights[i].name != name) ++i;
-    if (i == scene.lights.size()) {
-      unknown.push_back("light '" + name + "'");
-      continue;
-    }
-    const Light& l = scene.lights[i];
-    if (!l.semi_dynamic) {
-      throw CookError("state changes light '" + name +
-                      "', which is static (only semi-dynamic lights can change)");
-    }
-    const glm::vec3 color = o.has_color ? glm::vec3(o.color[0], o.color[1], o.color[2]) : l.color;
-    const float intensity = o.has_intensity ? o.intensity : l.intensity;
-    radiant[i] = (o.has_on && !o.on) ? glm::vec3(0.0f) : color * intensity;
-  }
-  std::vector<uint8_t> visible(scene.objects.size(), 1);
-  for (const auto& [name, vis] : state.objects) {
-    size_t i = 0;
-    while (i < scene.objects.size() && scene.objects[i].name != name) ++i;
-    if (i == scene.objects.size()) {
-      unknown.push_back("object '" + name + "'");
-      continue;
-    }
-    visible[i] = vis ? 1 : 0;
-  }
-  if (!unknown.empty()) {
-    std::string list;
-    for (const std::string& u : unknown) list += (list.empty() ? "" : ", ") + u;
-    throw CookError(
-        "the state names what the scene does not have (or has not marked "
-        "semiDynamic): " +
-        list);
-  }
+  check_bake_inputs(scene, texels);
+  const ResolvedState resolved = resolve_state(scene, state);
+  const std::vector<glm::vec3>& radiant = resolved.radiant;
+  const std::vector<uint8_t>& visible = resolved.visible;
 
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t rays0 = tracer.rays_traced();

@@ -52,6 +52,10 @@ struct IndirectPreset {
 };
 IndirectPreset indirect_preset(const BakeOptions& options);
 
+// Throws CookError when the texel set's arrays disagree with its size or a light has a negative
+// or non-finite value: what every integrator checks before it lights texels.
+void check_bake_inputs(const Scene& scene, const TexelSet& texels);
+
 // Bakes B, every C_l and every interacting S_ol. With indirect light, C_l and S_ol have 3 channels
 // (bounce is tinted by the albedos it met; the pack builder stores 1 where the tint is below the
 // output step), S_ol may be negative (bounce the object adds). Effect, light and pair decisions
