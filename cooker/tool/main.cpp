@@ -55,7 +55,18 @@ constexpr const char* kBakeStateHelp =
     "options:\n"
     "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
     "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
-    "                         authored, all on and visible)\n";
+    "                         authored, all on and visible)\n"
+    "  --integrator I         cook (default): the cook's own integrator at --quality;\n"
+    "                         reference: unbiased path tracing from every texel (next-event\n"
+    "                         estimation to every light, MIS for light spheres and emissive\n"
+    "                         surfaces, Russian roulette), the independent reference; it also\n"
+    "                         writes the per-texel standard error and reports its noise\n"
+    "  --samples N            reference: paths per texel (2..1048576, default 256); the noise\n"
+    "                         falls as 1/sqrt(N)\n"
+    "  --std-error ERR.pfm    reference: where the standard-error map goes (RGB, same units\n"
+    "                         and layout as the map; default MAP.stderr.pfm beside MAP.pfm)\n"
+    "  (with --integrator reference, --seed and --threads apply; the quality, photon, virtual\n"
+    "  light and area-sample options do not)\n";
 
 constexpr const char* kAccuracyHelp =
     "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
@@ -103,7 +114,9 @@ const Verb kVerbs[] = {
      "[--virtual-lights N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
-     "bake-state SCENE [--state STATE.json] -o MAP.pfm [cook's options]", kBakeStateHelp},
+     "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator cook|reference] "
+     "[--samples N] [--std-error ERR.pfm] [cook's options]",
+     kBakeStateHelp},
     {"info", lightpatch::tool::verb_info, "info PACK [--json]",
      "Prints a pack's lights, objects, groups, patches, atlases and bytes.\n\n"
      "options:\n  --json   machine-readable output\n"},
