@@ -74,10 +74,12 @@ constexpr const char* kAccuracyHelp =
     "lights, area-light samples (when the scene has lights with a radius or emissive surfaces),\n"
     "texel density (coarser pages) and the 8-bit encoding (linear, square; default auto). Each\n"
     "setting is cooked (bake, finalize, pack), the authored state is recomposed from the pack on\n"
-    "the CPU reference and compared with a reference bake of the same state (bake-state at 4x\n"
-    "production's photons, virtual lights and area samples; 2x with --quick). The reference is\n"
-    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm, keyed by the scene, its\n"
-    "layout and the reference options, and reused by later runs.\n\n"
+    "the CPU reference and compared with a reference bake of the same state: by default the\n"
+    "path tracer (bake-state --integrator reference, 256 samples per texel, 64 with --quick),\n"
+    "whose own noise the CSV notes give; a row whose error is within that noise is marked\n"
+    "(within_noise) and does not beat other such rows on the Pareto front. The reference is\n"
+    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm (and .stderr.pfm), keyed\n"
+    "by the scene, its layout and the reference options, and reused by later runs.\n\n"
     "Errors over the valid light-map texels: relative RMSE (sqrt(sum (x-r)^2 / sum r^2)), max\n"
     "relative error over texels that matter (reference luminance >= 1% of its 99th percentile;\n"
     "max_c |x_c-r_c| / max_c r_c) and PSNR (peak: 99th percentile of the reference). Density\n"
@@ -91,9 +93,13 @@ constexpr const char* kAccuracyHelp =
     "                         rows (8..4096; default 128, 32 with --quick)\n"
     "  --quick                a short sweep for tests and CI: draft, production and draft's two\n"
     "                         encodings at a 32x32 page\n"
-    "  --reference-scale K    the reference's photons, virtual lights and area samples are K\n"
-    "                         times production's (1..16; default 4, 2 with --quick); its time\n"
-    "                         and photon memory grow with K\n"
+    "  --reference-integrator I  reference (default): the path tracer; cook: the cook's own\n"
+    "                         integrator at high settings (the former reference; its noise is\n"
+    "                         not estimated)\n"
+    "  --reference-samples N  path tracer: samples per texel (2..1048576; default 256, 64 with\n"
+    "                         --quick); its noise falls as 1/sqrt(N), its time grows with N\n"
+    "  --reference-scale K    --reference-integrator cook: photons, virtual lights and area\n"
+    "                         samples K times production's (1..16; default 4, 2 with --quick)\n"
     "  --runtime-csv OUT.csv  also the runtime: the encoding rows' bake packed with each\n"
     "                         encoding (auto, linear, square) and recomposed on the CPU reference\n"
     "                         (float32 target; median rebuild time), against the float "
@@ -138,7 +144,8 @@ const Verb kVerbs[] = {
      "options:\n  --json   machine-readable output\n"},
     {"accuracy", lightpatch::tool::verb_accuracy,
      "accuracy SCENE --csv OUT.csv --plot OUT.png [--runtime-csv OUT.csv [--gles]] "
-     "[--lightmap-size N] [--quick] [--reference-scale K] [--no-cache] [--seed N] [--threads N] "
+     "[--lightmap-size N] [--quick] [--reference-integrator reference|cook] "
+     "[--reference-samples N] [--reference-scale K] [--no-cache] [--seed N] [--threads N] "
      "[--quiet]",
      kAccuracyHelp},
 };
