@@ -315,7 +315,8 @@ class EmbreeTracer final : public Tracer {
       }
       mesh_object_[m] = mesh.object;
       const size_t tris = mesh.indices.size() / 3;
-      if (tris == 0 || mesh.positions.empty()) continue;
+      // A mesh that casts no shadows (a light's own flame or bulb) is not an occluder at all.
+      if (tris == 0 || mesh.positions.empty() || !mesh.cast_shadows) continue;
       RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
       check("new geometry");
       auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,

@@ -103,6 +103,43 @@ TEST(Indirect, AlbedoNearOneStaysFinite) {
   EXPECT_LT(r.flux, 1.2 * expected);
 }
 
+// A candle inside its closed flame mesh (albedo 1, extras castShadows: false) lights and bounces
+// exactly like the same candle without the mesh; the same mesh casting shadows swallows it.
+TEST(Indirect, LightInsideItsOwnFlameMeshIsNotSwallowed) {
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  o.photons = 4000;
+  o.virtual_lights = 48;
+  const glm::vec3 lamp{0.13f, 0.21f, -0.17f};
+  auto bake = [&](int flame) {  // 0: no flame mesh, 1: flame casting no shadows, 2: casting
+    Scene s = test::furnace_box(0.5f);
+    s.materials.push_back({"flame", glm::vec3(1.0f), -1, glm::vec3(0.0f)});
+    if (flame > 0) {
+      const int m = test::add_box(s, lamp - glm::vec3(0.02f), lamp + glm::vec3(0.02f), "flame", -1,
+                                  int(s.materials.size()) - 1);
+      s.meshes[size_t(m)].cast_shadows = flame == 2;
+    }
+    test::finish(s);
+    s.lights = {test::point_light("candle", lamp, 1.0f)};
+    const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, 8);
+    auto tracer = make_embree_tracer(s);
+    Progress progress(true);
+    Report report;
+    return bake_maps(s, test::bare_layout(texels.width, texels.height), texels, *tracer, o,
+                     progress, report)
+        .base;
+  };
+  const FloatImage bare = bake(0), flame = bake(1), shut = bake(2);
+  double sum_bare = 0.0, sum_shut = 0.0;
+  for (size_t i = 0; i < bare.data.size(); ++i) {
+    EXPECT_FLOAT_EQ(flame.data[i], bare.data[i]) << "texel component " << i;
+    sum_bare += bare.data[i];
+    sum_shut += shut.data[i];
+  }
+  EXPECT_GT(sum_bare, 0.0);
+  EXPECT_LT(sum_shut, 0.01 * sum_bare);  // a flame that casts shadows would swallow the candle
+}
+
 bool has_decision(Report& report, const std::string& what, bool taken,
                   const std::string& in_reason) {
   for (const auto& d : report.root()["decisions"]) {
