@@ -220,9 +220,17 @@ class EmbreeTracer final : public Tracer {
   }
 
   void occluded_static_many(const Ray* rays, int n, uint8_t* blocked) const override {
-    if (packet_width_ == 16) return occluded_packets<16>(rays, n, blocked);
-    if (packet_width_ == 8) return occluded_packets<8>(rays, n, blocked);
-    occluded_packets<4>(rays, n, blocked);
+    occluded_batch(rays, n, blocked, kStaticMask);
+  }
+
+  void occluded_many(const Ray* rays, int n, uint8_t* blocked) const override {
+    occluded_batch(rays, n, blocked, kStaticMask | kObjectMask);
+  }
+
+  void occluded_batch(const Ray* rays, int n, uint8_t* blocked, unsigned accept) const {
+    if (packet_width_ == 16) return occluded_packets<16>(rays, n, blocked, accept);
+    if (packet_width_ == 8) return occluded_packets<8>(rays, n, blocked, accept);
+    occluded_packets<4>(rays, n, blocked, accept);
   }
 
   int batch_width() const override { return packet_width_; }
@@ -440,16 +448,16 @@ class EmbreeTracer final : public Tracer {
   }
 
   template <int W>
-  void occluded_packets(const Ray* rays, int n, uint8_t* blocked) const {
+  void occluded_packets(const Ray* rays, int n, uint8_t* blocked, unsigned accept) const {
     QueryContext qc;
-    init_context(qc, kStaticMask);
+    init_context(qc, accept);
     for (int first = 0; first < n; first += W) {
       const int m = std::min(W, n - first);
       alignas(64) int valid[W];
       alignas(64) typename Packet<W>::Ray ray;
       int live = 0;
       for (int i = 0; i < W; ++i) {
-        valid[i] = (i < m && set_lane(ray, i, rays[first + i], kStaticMask)) ? -1 : 0;
+        valid[i] = (i < m && set_lane(ray, i, rays[first + i], accept)) ? -1 : 0;
         live += valid[i] != 0 ? 1 : 0;
       }
       if (live > 0) {
