@@ -1,14 +1,20 @@
 #include "direct_light.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace lightpatch::cooker {
 
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
+
+float max3(const glm::vec3& v) {
+  return std::max({v.x, v.y, v.z});
+}
 
 uint64_t splitmix(uint64_t x) {
   x += 0x9e3779b97f4a7c15ull;
@@ -144,22 +150,33 @@ bool view_sphere_light(const Light& light, const glm::vec3& p, SphereView* view)
   return true;
 }
 
-glm::vec3 sample_sphere_view(const SphereView& view, float u, float v, float* t_surface) {
-  // cos = 1 - u (1 - cos_max); sin^2 = (1 - cos)(1 + cos) keeps small cones exact.
-  const float a = u * view.one_minus_cos;
-  const float c = 1.0f - a;
-  const float s = std::sqrt(std::max(0.0f, a * (2.0f - a)));
+glm::vec3 sample_sphere_view(const SphereView& view, const glm::vec3& n, float u, float v,
+                             float* t_surface) {
+  const bool inside = view.cos_max <= -1.0f;
+  // Outside: cos = 1 - u (1 - cos_max) about the axis; sin^2 = (1 - cos)(1 + cos) keeps small
+  // cones exact. Inside: cos = sqrt(1 - u) about the normal (cosine-weighted).
+  const glm::vec3 axis = inside ? n : view.axis;
+  const float a = inside ? u : u * view.one_minus_cos;
+  const float c = inside ? std::sqrt(std::max(0.0f, 1.0f - u)) : 1.0f - a;
+  const float s = inside ? std::sqrt(u) : std::sqrt(std::max(0.0f, a * (2.0f - a)));
   const float phi = 2.0f * kPi * v;
   glm::vec3 t, b;
-  basis(view.axis, t, b);
+  basis(axis, t, b);
   const glm::vec3 dir =
-      glm::normalize(t * (s * std::cos(phi)) + b * (s * std::sin(phi)) + view.axis * c);
-  // Along dir the centre is at projection d c and off-axis distance d s.
+      glm::normalize(t * (s * std::cos(phi)) + b * (s * std::sin(phi)) + axis * c);
+  // Along dir the centre is at projection d cc and off-axis distance d ss.
+  const float cc = glm::dot(dir, view.axis);
+  const float ss2 = std::max(0.0f, 1.0f - cc * cc);
   const float d = view.distance, r = view.radius;
-  const float h2 = std::max(0.0f, r * r - d * d * s * s);
-  const float near = d * c - std::sqrt(h2);
-  *t_surface = near > 0.0f ? near : d * c + std::sqrt(h2);  // inside: the far side
+  const float h = std::sqrt(std::max(0.0f, r * r - d * d * ss2));
+  const float near = d * cc - h;
+  *t_surface = near > 0.0f ? near : d * cc + h;  // inside: the far side
   return dir;
+}
+
+float sphere_view_pdf(const SphereView& view, const glm::vec3& n, const glm::vec3& w) {
+  if (view.cos_max <= -1.0f) return std::max(0.0f, glm::dot(n, w)) / kPi;
+  return glm::dot(view.axis, w) >= view.cos_max ? 1.0f / view.solid_angle() : 0.0f;
 }
 
 float sphere_hit_distance(const glm::vec3& p, const glm::vec3& dir, const glm::vec3& centre,
@@ -235,11 +252,11 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
     out.push_back({origin, dl > 0.0f ? to_l / dl : n, eps, reach, glm::vec3(e)});
     return true;
   }
-  // The visible cone, stratified g x g (cos by u, angle by v) and jittered per texel; each sample
-  // brings L cos(n, w) Omega / count.
+  // The visible cone (or, inside the sphere, the cosine-weighted hemisphere), stratified g x g
+  // and jittered per texel; each sample brings L cos(n, w) / pdf(w) / count.
   const int g = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples))));
   const int count = g * g;
-  const float per_sample = view.radiance * view.solid_angle() / static_cast<float>(count);
+  const float per_sample = view.radiance / static_cast<float>(count);
   const size_t first = out.size();
   float total = 0.0f;
   for (int i = 0; i < count; ++i) {
@@ -247,9 +264,11 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
     const float u = (static_cast<float>(i % g) + hash_to_unit(h)) / static_cast<float>(g);
     const float v = (static_cast<float>(i / g) + hash_to_unit(splitmix(h))) / static_cast<float>(g);
     float t_surface = 0.0f;
-    const glm::vec3 w = sample_sphere_view(view, u, v, &t_surface);
-    const float e = per_sample * glm::dot(n, w);
-    if (!(e > 0.0f)) continue;
+    const glm::vec3 w = sample_sphere_view(view, n, u, v, &t_surface);
+    const float cos_w = glm::dot(n, w);
+    const float pdf = sphere_view_pdf(view, n, w);
+    if (!(cos_w > 0.0f) || !(pdf > 0.0f)) continue;
+    const float e = per_sample * cos_w / pdf;
     const glm::vec3 to_s = p + w * t_surface - origin;
     const float ds = glm::length(to_s);
     // A surface point inside the sphere has nothing to trace.
@@ -293,6 +312,7 @@ EmissiveLights::EmissiveLights(const Scene& scene) {
         if (glm::dot(sn, tri.normal) < 0.0f) tri.normal = -tri.normal;
       }
       tri.radiance = L;
+      tri.hittable = mesh.cast_shadows;
       tri_of_[static_cast<size_t>(mesh_first_[mi]) + i / 3] = static_cast<int32_t>(tris_.size());
       tris_.push_back(tri);
       total += static_cast<double>(peak) * tri.area;
@@ -302,6 +322,115 @@ EmissiveLights::EmissiveLights(const Scene& scene) {
   cdf_.resize(power.size());
   for (size_t i = 0; i < power.size(); ++i) cdf_[i] = static_cast<float>(power[i] / total);
   if (!cdf_.empty()) cdf_.back() = 1.0f;
+  build_clusters(scene);
+}
+
+void EmissiveLights::build_clusters(const Scene& scene) {
+  // Connected pieces: triangles of one mesh sharing a vertex position (union-find).
+  std::vector<uint32_t> parent(tris_.size());
+  for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<uint32_t>(i);
+  auto root = [&](uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    if (mesh_first_[mi] < 0) continue;
+    const MeshInstance& mesh = scene.meshes[mi];
+    std::map<std::array<float, 3>, uint32_t> seen;
+    for (size_t t = 0; t < mesh.indices.size() / 3; ++t) {
+      const int32_t k = tri_of_[static_cast<size_t>(mesh_first_[mi]) + t];
+      if (k < 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        const glm::vec3& q = mesh.positions[mesh.indices[3 * t + static_cast<size_t>(c)]];
+        const auto [it, fresh] =
+            seen.emplace(std::array<float, 3>{q.x, q.y, q.z}, static_cast<uint32_t>(k));
+        if (!fresh) parent[root(static_cast<uint32_t>(k))] = root(it->second);
+      }
+    }
+  }
+  std::map<uint32_t, std::vector<uint32_t>> pieces;
+  for (size_t i = 0; i < tris_.size(); ++i) {
+    pieces[root(static_cast<uint32_t>(i))].push_back(static_cast<uint32_t>(i));
+  }
+  auto centroid = [&](const std::vector<uint32_t>& tris) {
+    glm::vec3 c(0.0f);
+    for (uint32_t t : tris) c += tris_[t].p0 + (tris_[t].e1 + tris_[t].e2) / 3.0f;
+    return c / static_cast<float>(tris.size());
+  };
+  // At most kMaxClusters groups of pieces: split the group of most pieces at the median of its
+  // pieces' centroids along their widest axis until every piece is alone or the budget is used.
+  std::vector<std::vector<std::vector<uint32_t>>> groups(1);
+  for (auto& [r, tris] : pieces) groups[0].push_back(std::move(tris));
+  if (groups[0].empty()) groups.clear();
+  while (!groups.empty() && static_cast<int>(groups.size()) < kMaxClusters) {
+    size_t big = 0;
+    for (size_t g = 1; g < groups.size(); ++g) {
+      if (groups[g].size() > groups[big].size()) big = g;
+    }
+    if (groups[big].size() < 2) break;
+    std::vector<std::vector<uint32_t>>& grp = groups[big];
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    std::vector<glm::vec3> cs;
+    for (const auto& piece : grp) {
+      cs.push_back(centroid(piece));
+      lo = glm::min(lo, cs.back());
+      hi = glm::max(hi, cs.back());
+    }
+    const glm::vec3 ext = hi - lo;
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+    std::vector<size_t> order(grp.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+      return cs[a][axis] < cs[b][axis] || (cs[a][axis] == cs[b][axis] && a < b);
+    });
+    std::vector<std::vector<uint32_t>> left, right;
+    for (size_t i = 0; i < order.size(); ++i) {
+      (i < order.size() / 2 ? left : right).push_back(std::move(grp[order[i]]));
+    }
+    groups[big] = std::move(left);
+    groups.push_back(std::move(right));
+  }
+  for (const auto& grp : groups) {
+    Cluster c;
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    double power = 0.0;
+    for (const auto& piece : grp) {
+      for (uint32_t t : piece) {
+        const Tri& tri = tris_[t];
+        for (const glm::vec3& q : {tri.p0, tri.p0 + tri.e1, tri.p0 + tri.e2}) {
+          lo = glm::min(lo, q);
+          hi = glm::max(hi, q);
+        }
+        c.tris.push_back(t);
+        power += static_cast<double>(max3(tri.radiance)) * tri.area;
+        c.cdf.push_back(static_cast<float>(power));
+      }
+    }
+    c.centre = 0.5f * (lo + hi);
+    c.radius2 = glm::dot(hi - c.centre, hi - c.centre);
+    c.power = static_cast<float>(power);
+    const int index = static_cast<int>(clusters_.size());
+    float prev = 0.0f;
+    for (size_t k = 0; k < c.tris.size(); ++k) {
+      c.cdf[k] = static_cast<float>(c.cdf[k] / power);
+      tris_[c.tris[k]].cluster = index;
+      tris_[c.tris[k]].p_in_cluster = c.cdf[k] - prev;
+      prev = c.cdf[k];
+    }
+    c.cdf.back() = 1.0f;
+    clusters_.push_back(std::move(c));
+  }
+}
+
+void EmissiveLights::cluster_cdf(const glm::vec3& x, float* cdf) const {
+  double sum = 0.0;
+  for (size_t c = 0; c < clusters_.size(); ++c) {
+    const glm::vec3 d = clusters_[c].centre - x;
+    sum += clusters_[c].power / std::max(glm::dot(d, d), clusters_[c].radius2);
+    cdf[c] = static_cast<float>(sum);
+  }
+  for (size_t c = 0; c < clusters_.size(); ++c) cdf[c] = static_cast<float>(cdf[c] / sum);
+  if (!clusters_.empty()) cdf[clusters_.size() - 1] = 1.0f;
 }
 
 void EmissiveLights::sample(const glm::vec3& p, const glm::vec3& n, int samples, uint64_t rng,
@@ -342,29 +471,48 @@ void EmissiveLights::sample(const glm::vec3& p, const glm::vec3& n, int samples,
   }
 }
 
-EmissiveLights::Point EmissiveLights::emitter(int i) const {
+EmissiveLights::Point EmissiveLights::emitter(int i, const glm::vec3& x) const {
   const Tri& tri = tris_[static_cast<size_t>(i)];
-  const float p_tri =
-      cdf_[static_cast<size_t>(i)] - (i > 0 ? cdf_[static_cast<size_t>(i) - 1] : 0.0f);
+  float cdf[kMaxClusters];
+  cluster_cdf(x, cdf);
+  const size_t c = static_cast<size_t>(tri.cluster);
+  const float p_cluster = cdf[c] - (c > 0 ? cdf[c - 1] : 0.0f);
   Point pt;
   pt.position = tri.p0;
   pt.normal = tri.normal;
   pt.radiance = tri.radiance;
-  pt.pdf_area = p_tri / tri.area;
+  pt.pdf_area = p_cluster * tri.p_in_cluster / tri.area;
+  pt.emitter = i;
   return pt;
 }
 
-EmissiveLights::Point EmissiveLights::sample_point(float u0, float u1, float u2) const {
-  if (tris_.empty()) return Point{};
-  const size_t k =
-      std::min(cdf_.size() - 1,
-               static_cast<size_t>(std::upper_bound(cdf_.begin(), cdf_.end(), u0) - cdf_.begin()));
-  Point pt = emitter(static_cast<int>(k));
+EmissiveLights::Point EmissiveLights::sample_point(const glm::vec3& x, float u0, float u1,
+                                                   float u2) const {
+  if (clusters_.empty()) return Point{};
+  float cdf[kMaxClusters];
+  cluster_cdf(x, cdf);
+  const size_t n = clusters_.size();
+  const size_t c = std::min(n - 1, static_cast<size_t>(std::upper_bound(cdf, cdf + n, u0) - cdf));
+  const float lo = c > 0 ? cdf[c - 1] : 0.0f;
+  const float p_cluster = cdf[c] - lo;
+  if (!(p_cluster > 0.0f)) return Point{};
+  // The rest of u0 picks the triangle.
+  const float u = std::clamp((u0 - lo) / p_cluster, 0.0f, 1.0f);
+  const Cluster& cl = clusters_[c];
+  const size_t k = std::min(
+      cl.tris.size() - 1,
+      static_cast<size_t>(std::upper_bound(cl.cdf.begin(), cl.cdf.end(), u) - cl.cdf.begin()));
+  const int i = static_cast<int>(cl.tris[k]);
+  const Tri& tri = tris_[static_cast<size_t>(i)];
+  Point pt;
+  pt.normal = tri.normal;
+  pt.radiance = tri.radiance;
+  pt.pdf_area = p_cluster * tri.p_in_cluster / tri.area;
+  pt.emitter = i;
   if (u1 + u2 > 1.0f) {
     u1 = 1.0f - u1;
     u2 = 1.0f - u2;
   }
-  const Tri& tri = tris_[k];
   pt.position = tri.p0 + tri.e1 * u1 + tri.e2 * u2;
   return pt;
 }

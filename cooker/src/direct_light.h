@@ -65,9 +65,16 @@ struct SphereView {
 // light (outside the spot cone, beyond the range, radiance 0).
 bool view_sphere_light(const Light& light, const glm::vec3& p, SphereView* view);
 
-// A direction in the visible cone for (u, v) in [0,1)^2, uniform in solid angle (probability
-// density 1 / solid_angle()), and the distance from p to the sphere's surface along it.
-glm::vec3 sample_sphere_view(const SphereView& view, float u, float v, float* t_surface);
+// A direction towards the sphere for (u, v) in [0,1)^2 and the distance from p to the sphere's
+// surface along it (its far side from inside). Outside the sphere uniform in the visible cone
+// (density 1 / solid_angle()); inside, where every direction meets it, cosine-weighted about the
+// receiver's normal n (density cos / pi), which makes an unshadowed estimate exact.
+glm::vec3 sample_sphere_view(const SphereView& view, const glm::vec3& n, float u, float v,
+                             float* t_surface);
+
+// The density per solid angle with which sample_sphere_view picks the unit direction w (0 for
+// a direction outside the cone or below the horizon inside).
+float sphere_view_pdf(const SphereView& view, const glm::vec3& n, const glm::vec3& w);
 
 // Distance along the unit `dir` from p to where the ray meets the sphere (centre, radius) first
 // at t > 0 (its far side when p is inside), or -1 when it misses.
@@ -105,26 +112,50 @@ class EmissiveLights {
   void sample(const glm::vec3& p, const glm::vec3& n, int samples, uint64_t rng, float eps,
               std::vector<LightSample>& out) const;
 
-  // For a path tracer: one point on the emitters for (u0, u1, u2) in [0,1)^3, the triangle
-  // chosen by power, the point uniform on it.
+  // For a path tracer. The emitters are grouped in clusters (the connected pieces of each
+  // emitting mesh: a flame, a panel; beyond kMaxClusters, neighbouring pieces merged): a point is
+  // drawn for a receiver at x by picking a cluster with probability proportional to its power
+  // over max(squared distance to x, its radius squared), a triangle in it by power, a point
+  // uniform on that (u0, u1, u2 in [0,1)).
+  static constexpr int kMaxClusters = 64;
   struct Point {
     glm::vec3 position{0.0f}, normal{0.0f};  // normal: the side it emits from
     glm::vec3 radiance{0.0f};
     float pdf_area = 0.0f;  // probability density of the point per unit area
+    int emitter = -1;
   };
-  Point sample_point(float u0, float u1, float u2) const;
-  // The emitter that triangle `triangle` of mesh `mesh` is, or -1.
+  Point sample_point(const glm::vec3& x, float u0, float u1, float u2) const;
+  // The emitter that triangle `triangle` of mesh `mesh` is, or -1 (triangle within the mesh).
   int find(int mesh, int triangle) const;
-  // Emitter i (from find()) as sample_point() would give a point of it.
-  Point emitter(int i) const;
+  // Emitter i (from find()): its normal, radiance and the density per unit area with which
+  // sample_point(x, ...) picks its points; position is its first vertex.
+  Point emitter(int i, const glm::vec3& x) const;
+  // False for an emitter on a mesh with castShadows false: no ray can hit it, only sampling
+  // finds it.
+  bool hittable(int i) const { return tris_[static_cast<size_t>(i)].hittable; }
+  size_t cluster_count() const { return clusters_.size(); }
 
  private:
   struct Tri {
     glm::vec3 p0, e1, e2, normal;
     float area;
     glm::vec3 radiance;
+    bool hittable = true;
+    int cluster = 0;
+    float p_in_cluster = 0.0f;  // its share of the cluster's power
   };
+  struct Cluster {
+    glm::vec3 centre{0.0f};
+    float radius2 = 0.0f;        // squared radius of a sphere around its triangles
+    float power = 0.0f;          // sum of peak radiance x area
+    std::vector<uint32_t> tris;  // indices into tris_
+    std::vector<float> cdf;      // cumulative power over `tris`, 1 at the end
+  };
+  void build_clusters(const Scene& scene);
+  // Cumulative pick probabilities of the clusters for a receiver at x (1 at the end).
+  void cluster_cdf(const glm::vec3& x, float* cdf) const;
   std::vector<Tri> tris_;
+  std::vector<Cluster> clusters_;
   std::vector<float> cdf_;           // cumulative power, normalized to 1 at the end
   std::vector<int32_t> mesh_first_;  // per mesh: its first entry in tri_of_, or -1
   std::vector<int32_t> tri_of_;      // per triangle of an emitting mesh: index in tris_ or -1

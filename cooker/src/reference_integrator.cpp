@@ -45,10 +45,16 @@ float power_weight(float a, float b) {
   return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
 
-// Random numbers of one path vertex: a counter hashed from (seed, texel, sample, bounce).
+// Random numbers of one path vertex: a key hashed from (seed, texel, sample, bounce), then a
+// counter through one round of splitmix64.
 struct Stream {
   uint64_t key, counter = 0;
-  float next() { return hash_to_unit(sample_hash(key, ++counter, 0, 0)); }
+  float next() {
+    uint64_t x = key + 0x9e3779b97f4a7c15ull * ++counter;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return hash_to_unit(x ^ (x >> 31));
+  }
 };
 
 // Orthonormal basis around unit w (Duff et al. 2017).
@@ -140,6 +146,8 @@ class PathTracer {
       shadow_value.clear();
       shadow_owner.clear();
       rays.clear();
+      rays.reserve(active.size());
+      shadow.reserve(active.size() * (lights_.size() + 1));
       for (PathState& p : active) {
         Stream rng{sample_hash(seed_, p.texel, p.sample, static_cast<uint64_t>(p.depth))};
         next_event(p, rng, shadow, shadow_value, shadow_owner);
@@ -170,13 +178,13 @@ class PathTracer {
           if (!(ts > 0.0f) || !(ts < t_hit)) continue;
           SphereView view;
           if (!view_sphere_light(*l.light, p.position, &view)) continue;
-          const float w = power_weight(pdf_dir, 1.0f / view.solid_angle());
+          const float w = power_weight(pdf_dir, sphere_view_pdf(view, p.normal, p.dir));
           value += p.throughput * l.radiant * (kPi * view.radiance * w);
         }
         if (!h.hit) continue;
         const int e = emissive_.find(h.mesh, h.triangle);
         if (e >= 0) {
-          const EmissiveLights::Point pt = emissive_.emitter(e);
+          const EmissiveLights::Point pt = emissive_.emitter(e, p.position);
           const float cos_b = -glm::dot(pt.normal, p.dir);
           if (cos_b > 0.0f) {
             const float pdf_light = pt.pdf_area * h.t * h.t / cos_b;
@@ -231,20 +239,22 @@ class PathTracer {
         add(light.position, l.radiant * e, eps_);
         continue;
       }
-      SphereView view;
       const float u = rng.next(), v = rng.next();
+      // Wholly behind the surface: nothing to sample.
+      if (glm::dot(light.position - p.position, p.normal) <= -light.radius) continue;
+      SphereView view;
       if (!view_sphere_light(light, p.position, &view)) continue;
       float t_surface = 0.0f;
-      const glm::vec3 w = sample_sphere_view(view, u, v, &t_surface);
+      const glm::vec3 w = sample_sphere_view(view, p.normal, u, v, &t_surface);
       const float c = glm::dot(p.normal, w);
-      if (!(c > 0.0f)) continue;
-      const float omega = view.solid_angle();
-      const float weight = power_weight(1.0f / omega, c / kPi);
-      add(p.position + w * t_surface, l.radiant * (view.radiance * c * omega * weight), eps_);
+      const float pdf = sphere_view_pdf(view, p.normal, w);
+      if (!(c > 0.0f) || !(pdf > 0.0f)) continue;
+      const float weight = power_weight(pdf, c / kPi);
+      add(p.position + w * t_surface, l.radiant * (view.radiance * c / pdf * weight), eps_);
     }
     if (emissive_.empty()) return;
     const float u0 = rng.next(), u1 = rng.next(), u2 = rng.next();
-    const EmissiveLights::Point pt = emissive_.sample_point(u0, u1, u2);
+    const EmissiveLights::Point pt = emissive_.sample_point(p.position, u0, u1, u2);
     const glm::vec3 to = pt.position - origin;
     const float d2 = glm::dot(to, to);
     const float d = std::sqrt(d2);
@@ -254,7 +264,9 @@ class PathTracer {
     const float cos_b = -glm::dot(pt.normal, dir);
     if (!(cos_a > 0.0f) || !(cos_b > 0.0f)) return;
     const float pdf_light = pt.pdf_area * d2 / cos_b;  // per solid angle
-    const float weight = power_weight(pdf_light, cos_a / kPi);
+    // An emitter no ray can hit (castShadows false) is found by sampling alone: full weight.
+    const float weight =
+        emissive_.hittable(pt.emitter) ? power_weight(pdf_light, cos_a / kPi) : 1.0f;
     add(pt.position, pt.radiance * (cos_a / pdf_light * weight), 2.0f * eps_);
   }
 
@@ -269,6 +281,10 @@ class PathTracer {
     const int n = static_cast<int>(rays.size());
     if (!any_visible_) {
       tracer_.occluded_static_many(rays.data(), n, blocked.data());
+      return;
+    }
+    if (!any_hidden_) {
+      tracer_.occluded_many(rays.data(), n, blocked.data());
       return;
     }
     hits.resize(rays.size());

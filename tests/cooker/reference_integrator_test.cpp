@@ -135,6 +135,28 @@ TEST(ReferenceIntegrator, SphereLightMatchesItsClosedForm) {
   EXPECT_LT(worst_z, 5.0);  // 144 texels: |z| > 5 is a 1e-4 event for honest errors
 }
 
+// Receivers inside a light's sphere (a flame's surface around its candle) see it in every
+// direction: E = pi L = I / r^2 whatever their normal, and the estimate is exact.
+TEST(ReferenceIntegrator, ReceiversInsideALightSphereGetPiL) {
+  Scene scene = floor_scene();
+  Light l = test::point_light("candle", {0.0f, 0.5f, 0.0f}, 2.0f);
+  l.radius = 0.02f;
+  scene.lights = {l};
+  test::finish(scene);
+  scene.materials[0].albedo = glm::vec3(0.0f);
+  // Four receivers inside the sphere (0.5 m above the floor), one tilted, one upside down.
+  TexelSet texels =
+      grid_texels(2, 2, {-0.01f, 0.5f, -0.01f}, {0.02f, 0, 0}, {0, 0, 0.02f}, {0, 1, 0});
+  texels.normal[2] = glm::vec3(0, -1, 0);
+  texels.normal[3] = glm::normalize(glm::vec3(1, 1, 0));
+  const ReferenceBake r = trace(scene, texels, 16);
+  const float want = 2.0f / (l.radius * l.radius);
+  for (size_t t = 0; t < 4; ++t) {
+    EXPECT_NEAR(r.map.data[3 * t], want, 1e-4f * want) << "texel " << t;
+    EXPECT_LT(r.std_error.data[3 * t], 1e-4f * want) << "texel " << t;
+  }
+}
+
 // A 2 x 2 emitter 1 m above the texel, facing down (emitter black, so nothing bounces back).
 TEST(ReferenceIntegrator, EmissiveSquareMatchesFormFactor) {
   Scene scene;
