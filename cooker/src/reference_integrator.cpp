@@ -32,6 +32,7 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 constexpr int kPassSamples = 16;
+constexpr int kMinTargetSamples = 64;
 // Steps over hidden objects a ray takes before it looks at static geometry only.
 constexpr int kHiddenSteps = 16;
 
@@ -420,6 +421,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
   Accumulator acc(texels.position.size());
   const int passes = (options.samples + kPassSamples - 1) / kPassSamples;
   progress.begin("reference", static_cast<uint64_t>(passes) * static_cast<uint64_t>(h));
+  int done = 0;  // samples traced per texel
   for (int pass = 0; pass < passes; ++pass) {
     const int s0 = pass * kPassSamples, s1 = std::min(options.samples, s0 + kPassSamples);
     parallel_for(h, threads, [&](int y) {
@@ -439,19 +441,25 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
       }
       progress.advance();
     });
-    // Convergence so far, at each power of two.
-    if (s1 < options.samples && s1 >= 2 && (s1 & (s1 - 1)) == 0 && !progress.quiet()) {
-      const Noise n = noise_of(acc, texels, s1);
-      progress.message("reference: " + std::to_string(s1) +
-                       " samples, mean relative standard "
-                       "error " +
-                       percent(n.mean_rel) + ", noise rel. RMSE " + percent(n.rel_rmse));
+    done = s1;
+    // Convergence so far, at each power of two; the noise target is checked from
+    // kMinTargetSamples on (fewer samples estimate the spread too poorly to stop on).
+    if (s1 < options.samples && (s1 & (s1 - 1)) == 0) {
+      const bool check = options.target_noise > 0.0 && s1 >= kMinTargetSamples;
+      if (check || !progress.quiet()) {
+        const Noise n = noise_of(acc, texels, s1);
+        progress.message("reference: " + std::to_string(s1) +
+                         " samples, mean relative standard "
+                         "error " +
+                         percent(n.mean_rel) + ", noise rel. RMSE " + percent(n.rel_rmse));
+        if (check && n.rel_rmse <= options.target_noise) break;
+      }
     }
   }
   const double stage_s = progress.end();
 
   ReferenceBake out;
-  out.samples = options.samples;
+  out.samples = done;
   out.map = FloatImage(w, h, 3);
   out.std_error = FloatImage(w, h, 3);
   for (int y = 0; y < h; ++y) {
@@ -459,14 +467,14 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
       const size_t t = texels.index(x, y);
       if (!texels.valid[t]) continue;
       glm::vec3 m, se;
-      texel_estimate(acc, t, options.samples, &m, &se);
+      texel_estimate(acc, t, done, &m, &se);
       for (int c = 0; c < 3; ++c) {
         out.map.at(x, y, c) = std::max(0.0f, m[c]);
         out.std_error.at(x, y, c) = se[c];
       }
     }
   }
-  const Noise noise = noise_of(acc, texels, options.samples);
+  const Noise noise = noise_of(acc, texels, done);
   out.mean_rel_std_error = noise.mean_rel;
   out.rel_rmse_noise = noise.rel_rmse;
   out.rays = tracer.rays_traced() - rays0;
@@ -479,6 +487,8 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
       "path tracing: cosine-weighted hemisphere, next-event estimation to every light with MIS "
       "(power heuristic) for light spheres and emissive triangles, Russian roulette on the albedo";
   j["samples"] = out.samples;
+  j["max_samples"] = options.samples;
+  j["target_noise"] = options.target_noise;
   j["seed"] = options.seed;
   j["threads"] = threads;
   j["max_bounces"] = kReferenceMaxBounces;

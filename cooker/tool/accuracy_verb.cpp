@@ -8,6 +8,7 @@
 // the CPU reference (and with --gles by the GLES runtime) against its float composition.
 #include <fcntl.h>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -50,6 +51,10 @@ using namespace lightpatch::cooker;
 // samples (kQuickReferenceFactor with --quick; --reference-scale). Either way a seed of its own,
 // so that its noise is independent of the sweep's.
 constexpr int kQuickReferenceSamples = 64;
+// The path tracer's default: progressive up to 4096 samples per texel, stopping once the noise
+// is at most 0.5 % relative RMSE (the test room stops at 4096, the small inn at 1024).
+constexpr int kReferenceMaxSamples = 4096;
+constexpr double kReferenceNoisePercent = 0.5;
 constexpr int kReferenceFactor = 4;
 constexpr int kQuickReferenceFactor = 2;
 constexpr uint64_t kReferenceSeedOffset = 7919;
@@ -63,9 +68,10 @@ struct AccuracyOptions {
   std::string scene_path, csv_path, plot_path, runtime_csv_path;
   bool gles = false;
   int lightmap_size = 0;
-  int reference_scale = 0;    // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
-  bool path_traced = true;    // --reference-integrator reference (default) or cook
-  int reference_samples = 0;  // 0 = kDefaultReferenceSamples (kQuickReferenceSamples, --quick)
+  int reference_scale = 0;        // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
+  bool path_traced = true;        // --reference-integrator reference (default) or cook
+  int reference_samples = 0;      // 0 = kReferenceMaxSamples (kQuickReferenceSamples, --quick)
+  double reference_noise = -1.0;  // percent; < 0 = kReferenceNoisePercent (off with --quick)
   bool quick = false;
   bool no_cache = false;
   int threads = 0;
@@ -534,6 +540,7 @@ int verb_accuracy(Args& args) {
   std::string integrator = "reference";
   if (!args.option("--reference-integrator", &integrator)) integrator = "reference";
   o.reference_samples = args.int_option("--reference-samples", 0, 2, 1 << 20);
+  o.reference_noise = args.float_option("--reference-noise", -1.0f, 0.0f, 100.0f);
   o.threads = args.int_option("--threads", 0, 1, 1024);
   o.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.quiet = args.flag("--quiet", "-q");
@@ -554,12 +561,14 @@ int verb_accuracy(Args& args) {
   if (o.path_traced && o.reference_scale > 0) {
     throw ArgsError("--reference-scale is for --reference-integrator cook");
   }
-  if (!o.path_traced && o.reference_samples > 0) {
-    throw ArgsError("--reference-samples is for --reference-integrator reference");
+  if (!o.path_traced && (o.reference_samples > 0 || o.reference_noise >= 0.0)) {
+    throw ArgsError(
+        "--reference-samples and --reference-noise are for --reference-integrator reference");
   }
   if (o.reference_samples == 0) {
-    o.reference_samples = o.quick ? kQuickReferenceSamples : kDefaultReferenceSamples;
+    o.reference_samples = o.quick ? kQuickReferenceSamples : kReferenceMaxSamples;
   }
+  if (o.reference_noise < 0.0) o.reference_noise = o.quick ? 0.0 : kReferenceNoisePercent;
   if (o.lightmap_size == 0) o.lightmap_size = o.quick ? kQuickLightmapSize : kDefaultLightmapSize;
   probe_output_folder(o.csv_path);
   probe_output_folder(o.plot_path);
@@ -600,6 +609,7 @@ int verb_accuracy(Args& args) {
   }
   ReferenceOptions pt_options;
   pt_options.samples = o.reference_samples;
+  pt_options.target_noise = 0.01 * o.reference_noise;
   pt_options.seed = o.seed + kReferenceSeedOffset;
   pt_options.threads = o.threads;
   Hasher hasher;
@@ -630,6 +640,7 @@ int verb_accuracy(Args& args) {
     }
     if (o.path_traced) {
       hasher.value(pt_options.samples);
+      hasher.value(pt_options.target_noise);
       hasher.value(pt_options.seed);
     } else {
       hasher.value(ref_options.quality);
@@ -642,26 +653,41 @@ int verb_accuracy(Args& args) {
   const std::string cache_stem =
       folder_of(o.csv_path) + "/lightpatch-accuracy-reference-" + hex64(hasher.h);
   const std::string cache_path = cache_stem + ".pfm";
-  const std::string cache_error_path = cache_stem + ".stderr.pfm";  // the path tracer's only
+  // The path tracer's also: its standard-error map and what it traced (samples, rays, seconds).
+  const std::string cache_error_path = cache_stem + ".stderr.pfm";
+  const std::string cache_info_path = cache_stem + ".json";
   FloatImage reference, reference_error;
+  nlohmann::json ref_info = nlohmann::json::object();
   bool cached = false;
   if (!o.no_cache && std::filesystem::exists(cache_path) &&
-      (!o.path_traced || std::filesystem::exists(cache_error_path))) {
+      (!o.path_traced ||
+       (std::filesystem::exists(cache_error_path) && std::filesystem::exists(cache_info_path)))) {
     try {
       reference = read_pfm(cache_path);
-      if (o.path_traced) reference_error = read_pfm(cache_error_path);
       const auto fits = [&](const FloatImage& m) {
         return m.width == ref_layout.layout.width && m.height == ref_layout.layout.height &&
                m.channels == 3;
       };
-      cached = fits(reference) && (!o.path_traced || fits(reference_error));
+      cached = fits(reference);
+      if (o.path_traced) {
+        reference_error = read_pfm(cache_error_path);
+        const std::vector<uint8_t> text = read_file(cache_info_path);
+        ref_info = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
+        cached = cached && fits(reference_error) && ref_info.is_object() &&
+                 ref_info.contains("samples") && ref_info["samples"].is_number_integer();
+      }
     } catch (const CookError& e) {
       progress.message(std::string("note: reference cache unreadable, baking again: ") + e.what());
+      cached = false;
     }
   }
   const std::string ref_what =
       o.path_traced
-          ? "path tracing, " + std::to_string(pt_options.samples) + " samples per texel"
+          ? "path tracing, up to " + std::to_string(pt_options.samples) + " samples per texel" +
+                (pt_options.target_noise > 0.0
+                     ? ", stopping at " + number(100.0 * pt_options.target_noise, "%.3g") +
+                           " % noise"
+                     : std::string())
           : "production x" + std::to_string(factor) + ": " + std::to_string(ref_options.photons) +
                 " photons, " + std::to_string(ref_options.virtual_lights) + " virtual lights, " +
                 std::to_string(ref_options.area_samples) + " area samples";
@@ -677,6 +703,7 @@ int verb_accuracy(Args& args) {
       reference = std::move(rb.map);
       reference_error = std::move(rb.std_error);
       finalize_map(reference_error, scene, ref_layout.layout, ref_layout.texels);
+      ref_info = {{"samples", rb.samples}, {"rays", rb.rays}, {"seconds", rb.seconds}};
     } else {
       reference = bake_state(scene, ref_layout.layout, ref_layout.texels, *tracer, StateSpec{},
                              ref_options, progress, scratch);
@@ -684,7 +711,11 @@ int verb_accuracy(Args& args) {
     finalize_map(reference, scene, ref_layout.layout, ref_layout.texels);
     ref_seconds = since(t);
     write_pfm(cache_path, reference);
-    if (o.path_traced) write_pfm(cache_error_path, reference_error);
+    if (o.path_traced) {
+      write_pfm(cache_error_path, reference_error);
+      const std::string text = ref_info.dump(1) + "\n";
+      write_file_atomic(cache_info_path, text.data(), text.size());
+    }
     progress.message("reference: baked in " + number(ref_seconds, "%.2f") + " s, cached in " +
                      cache_path);
   }
@@ -881,7 +912,10 @@ int verb_accuracy(Args& args) {
       "lightpatch accuracy " + o.scene_path + (o.quick ? " (--quick)" : ""),
       o.path_traced
           ? "reference: bake-state --integrator reference of the authored state (path tracing, " +
-                std::to_string(pt_options.samples) + " samples per texel, seed " +
+                ref_info.value("samples", nlohmann::json(0)).dump() +
+                " samples per texel: " + ref_what.substr(std::string("path tracing, ").size()) +
+                "; " + ref_info.value("rays", nlohmann::json(0)).dump() + " rays in " +
+                number(ref_info.value("seconds", 0.0), "%.1f") + " s, seed " +
                 std::to_string(pt_options.seed) + "), " + std::to_string(reference.width) + "x" +
                 std::to_string(reference.height) + (cached ? ", from the cache" : "")
           : "reference: bake_state of the authored state, production x" + std::to_string(factor) +

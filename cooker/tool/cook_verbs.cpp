@@ -257,6 +257,8 @@ int verb_bake_state(Args& args) {
   const bool has_samples = ref.samples != 0;
   if (!has_samples) ref.samples = kDefaultReferenceSamples;
   const bool has_std_error = args.option("--std-error", &std_error_out);
+  const float target_percent = args.float_option("--target-noise", 0.0f, 1e-3f, 100.0f);
+  ref.target_noise = 0.01 * target_percent;
   CookOptions o = parse_common(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
@@ -264,8 +266,8 @@ int verb_bake_state(Args& args) {
   if (!reference && integrator != "cook") {
     throw ArgsError("--integrator must be cook or reference, got '" + integrator + "'");
   }
-  if (!reference && (has_samples || has_std_error)) {
-    throw ArgsError("--samples and --std-error need --integrator reference");
+  if (!reference && (has_samples || has_std_error || target_percent > 0.0f)) {
+    throw ArgsError("--samples, --target-noise and --std-error need --integrator reference");
   }
   if (reference) {
     if (!has_std_error) std_error_out = std_error_path(o.output);

@@ -191,9 +191,10 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
 TEST(Accuracy, HelpListsTheOptions) {
   const ToolRun r = run_tool({"accuracy", "--help"});
   EXPECT_EQ(r.code, 0);
-  for (const char* option : {"--csv", "--plot", "--runtime-csv", "--gles", "--lightmap-size",
-                             "--quick", "--reference-integrator", "--reference-samples",
-                             "--reference-scale", "--no-cache", "--seed", "--threads", "--quiet"}) {
+  for (const char* option :
+       {"--csv", "--plot", "--runtime-csv", "--gles", "--lightmap-size", "--quick",
+        "--reference-integrator", "--reference-samples", "--reference-noise", "--reference-scale",
+        "--no-cache", "--seed", "--threads", "--quiet"}) {
     EXPECT_NE(r.out.find(option), std::string::npos) << option << " not in: " << r.out;
   }
 }

@@ -172,7 +172,8 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
   const ToolRun bake_state = expect_success({"bake-state", "--help"});
-  for (const char* option : {"--state", "--integrator", "--samples", "--std-error", "--quality"}) {
+  for (const char* option :
+       {"--state", "--integrator", "--samples", "--target-noise", "--std-error", "--quality"}) {
     EXPECT_NE(bake_state.out.find(option), std::string::npos) << option << " undocumented:\n"
                                                               << bake_state.out;
   }

@@ -216,6 +216,33 @@ TEST(ReferenceIntegrator, StandardErrorMatchesTheSpreadOfSeeds) {
   EXPECT_LT(ratio, 1.15);
 }
 
+// A noise target stops the passes at the first power of two that meets it; the result is the
+// same as asking for that many samples.
+TEST(ReferenceIntegrator, NoiseTargetStopsAtThePowerOfTwoThatMeetsIt) {
+  Scene s = test::furnace_box(0.5f);
+  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, 4);
+  auto tracer = make_embree_tracer(s);
+  Progress progress(true);
+  Report report;
+  ReferenceOptions o;
+  o.samples = 4096;
+  o.target_noise = 0.02;
+  const ReferenceBake early = bake_reference(s, texels, *tracer, {}, o, progress, report);
+  EXPECT_GE(early.samples, 64);
+  EXPECT_LT(early.samples, 4096);
+  EXPECT_EQ(early.samples & (early.samples - 1), 0);
+  EXPECT_LE(early.rel_rmse_noise, 0.02);
+  ReferenceOptions fixed;
+  fixed.samples = early.samples;
+  const ReferenceBake same = bake_reference(s, texels, *tracer, {}, fixed, progress, report);
+  EXPECT_TRUE(same.map.data == early.map.data);
+  if (early.samples > 64) {
+    fixed.samples = early.samples / 2;
+    EXPECT_GT(bake_reference(s, texels, *tracer, {}, fixed, progress, report).rel_rmse_noise, 0.02);
+  }
+}
+
 TEST(ReferenceIntegrator, SameBitsOnAnyThreadCountDifferentSeedsDiffer) {
   Scene s = test::furnace_box(0.7f);
   s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};

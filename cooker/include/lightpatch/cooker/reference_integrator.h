@@ -6,9 +6,9 @@
 // lightRadius, direct_light.h's SphereView) and emissive triangles, Lambertian surfaces with the
 // baker's albedo (base colour factor x texture at TEXCOORD_0), Russian roulette on the albedo.
 // Every path's random numbers are hashed from (seed, texel, sample, bounce), so the result is the
-// same on any thread count. Samples run in passes of 16 (progress reports the convergence after
-// each power of two); the per-texel spread of the samples gives a standard-error map beside the
-// irradiance map.
+// same on any thread count. Samples run in passes of 16, progressively: progress reports the
+// convergence after each power of two, where an optional noise target can stop it. The
+// per-texel spread of the samples gives a standard-error map beside the irradiance map.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +30,9 @@ constexpr int kReferenceMaxBounces = 1024;
 
 struct ReferenceOptions {
   int samples = kDefaultReferenceSamples;  // paths per texel, >= 2 (the spread needs two)
+  // > 0: stop early, at the first power of two of samples from 64 on at which the noise's
+  // relative RMSE (ReferenceBake::rel_rmse_noise) is at most this; `samples` is then the cap.
+  double target_noise = 0.0;
   uint64_t seed = 1;
   int threads = 0;  // 0 = all cores
 };
@@ -37,7 +40,7 @@ struct ReferenceOptions {
 struct ReferenceBake {
   FloatImage map;        // irradiance (RGB, the lights' units), valid texels only
   FloatImage std_error;  // per texel and channel: the standard error of `map`, same units
-  int samples = 0;
+  int samples = 0;       // traced per texel (fewer than asked when the noise target stopped it)
   uint64_t rays = 0;
   double seconds = 0.0;
   // Mean over the texels that matter (max channel at least 1 % of its 99th percentile over valid
