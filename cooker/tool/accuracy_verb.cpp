@@ -912,9 +912,9 @@ int verb_accuracy(Args& args) {
       "lightpatch accuracy " + o.scene_path + (o.quick ? " (--quick)" : ""),
       o.path_traced
           ? "reference: bake-state --integrator reference of the authored state (path tracing, " +
-                ref_info.value("samples", nlohmann::json(0)).dump() +
-                " samples per texel: " + ref_what.substr(std::string("path tracing, ").size()) +
-                "; " + ref_info.value("rays", nlohmann::json(0)).dump() + " rays in " +
+                ref_info.value("samples", nlohmann::json(0)).dump() + " samples per texel (" +
+                ref_what.substr(std::string("path tracing, ").size()) + ")" + "; " +
+                ref_info.value("rays", nlohmann::json(0)).dump() + " rays in " +
                 number(ref_info.value("seconds", 0.0), "%.1f") + " s, seed " +
                 std::to_string(pt_options.seed) + "), " + std::to_string(reference.width) + "x" +
                 std::to_string(reference.height) + (cached ? ", from the cache" : "")

@@ -9,7 +9,8 @@
 //     (rtcOccluded1M), and through the cook's Tracer (occluded_static one by one and
 //     occluded_static_many; intersect and intersect_many);
 //   - texel rays: from valid texels along cosine-distributed directions, 64 per texel (what a
-//     gather from one texel traces), single and batched.
+//     gather from one texel traces), single and batched;
+//   - the reference path tracer (bake_reference, 16 samples per texel), all threads.
 // Prints each rate and its ratio to the naive rtcOccluded1 rate. The cook's target is >= 0.8x
 // the naive rate per thread. Times are reported, never checked.
 // Usage: bench_ray_rate [SCENE.gltf|.glb] [--quality draft|preview|production] [--rays N]
@@ -31,6 +32,7 @@
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/import.h"
+#include "lightpatch/cooker/reference_integrator.h"
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
@@ -394,6 +396,15 @@ int main(int argc, char** argv) {
     rates.push_back(
         measure("Tracer::intersect_many, texel rays", ray_count, tracer_hit_many(texel)));
 
+    // The reference path tracer, all threads.
+    ReferenceOptions ro;
+    ro.samples = 16;
+    const uint64_t rr0 = tracer->rays_traced();
+    const double rc0 = cpu_now(CLOCK_PROCESS_CPUTIME_ID);
+    bake_reference(scene, texels, *tracer, {}, ro, progress, report);
+    const double ref_cpu = cpu_now(CLOCK_PROCESS_CPUTIME_ID) - rc0;
+    const uint64_t ref_rays = tracer->rays_traced() - rr0;
+
     const double naive_rate = rates[0].mrays_per_cpu_s;
     const double cook_rate = cook_cpu > 0.0 ? double(cook_rays) / cook_cpu * 1e-6 : 0.0;
     std::printf("one thread each; packet width %d (tracer batches of %d)\n", width,
@@ -407,6 +418,10 @@ int main(int argc, char** argv) {
                 "cook (bake_maps, all threads)", static_cast<unsigned long long>(cook_rays),
                 cook_rate, naive_rate > 0.0 ? cook_rate / naive_rate : 0.0, quality_name(quality),
                 cook_wall, cook_cpu);
+    const double ref_rate = ref_cpu > 0.0 ? double(ref_rays) / ref_cpu * 1e-6 : 0.0;
+    std::printf("%-50s %12llu %10.2f %9.2f   (%d samples per texel, %.2f s cpu)\n",
+                "reference path tracer (all threads)", static_cast<unsigned long long>(ref_rays),
+                ref_rate, naive_rate > 0.0 ? ref_rate / naive_rate : 0.0, ro.samples, ref_cpu);
   } catch (const CookError& e) {
     std::fprintf(stderr, "bench_ray_rate: %s\n", e.what());
     return 1;
