@@ -23,8 +23,9 @@ uint64_t splitmix(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// Orthonormal basis around unit w (Duff et al. 2017).
-void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
+}  // namespace
+
+void orthonormal_basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
   const float sign = std::copysign(1.0f, w.z);
   const float a = -1.0f / (sign + w.z);
   const float c = w.x * w.y * a;
@@ -32,7 +33,13 @@ void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
   b = glm::vec3(c, sign + w.y * w.y * a, -w.y);
 }
 
-}  // namespace
+glm::vec3 cosine_direction(const glm::vec3& n, float u, float v) {
+  const float r = std::sqrt(u), phi = 2.0f * kPi * v;
+  glm::vec3 t, b;
+  orthonormal_basis(n, t, b);
+  const float z = std::sqrt(std::max(0.0f, 1.0f - u));
+  return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
+}
 
 uint64_t sample_hash(uint64_t seed, uint64_t texel, uint64_t light, uint64_t sample) {
   return splitmix(splitmix(splitmix(splitmix(seed) ^ texel) ^ light) ^ sample);
@@ -161,7 +168,7 @@ glm::vec3 sample_sphere_view(const SphereView& view, const glm::vec3& n, float u
   const float s = inside ? std::sqrt(u) : std::sqrt(std::max(0.0f, a * (2.0f - a)));
   const float phi = 2.0f * kPi * v;
   glm::vec3 t, b;
-  basis(axis, t, b);
+  orthonormal_basis(axis, t, b);
   const glm::vec3 dir =
       glm::normalize(t * (s * std::cos(phi)) + b * (s * std::sin(phi)) + axis * c);
   // Along dir the centre is at projection d cc and off-axis distance d ss.

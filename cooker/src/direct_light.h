@@ -87,6 +87,12 @@ float sphere_hit_distance(const glm::vec3& p, const glm::vec3& dir, const glm::v
 // graphics"). Times the radiance it is a sphere light's unshadowed irradiance.
 float sphere_cosine_integral(float cos_theta, float sin2_sigma);
 
+// Orthonormal basis (t, b) completing unit w (Duff et al. 2017).
+void orthonormal_basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b);
+
+// A cosine-weighted direction about unit n for (u, v) in [0,1)^2 (density cos / pi).
+glm::vec3 cosine_direction(const glm::vec3& n, float u, float v);
+
 // Deterministic per-(seed, texel, light, sample) random numbers in [0,1).
 uint64_t sample_hash(uint64_t seed, uint64_t texel, uint64_t light, uint64_t sample);
 float hash_to_unit(uint64_t h);

@@ -29,14 +29,6 @@ float max3(const glm::vec3& v) {
   return std::max({v.x, v.y, v.z});
 }
 
-void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
-  const float sign = std::copysign(1.0f, w.z);
-  const float a = -1.0f / (sign + w.z);
-  const float c = w.x * w.y * a;
-  t = glm::vec3(1.0f + sign * w.x * w.x * a, sign * c, -sign * w.x);
-  b = glm::vec3(c, sign + w.y * w.y * a, -w.y);
-}
-
 float unit(uint64_t h) {
   return hash_to_unit(h);
 }
@@ -45,12 +37,7 @@ float unit2(uint64_t h) {
 }
 
 glm::vec3 cosine_dir(const glm::vec3& n, uint64_t h) {
-  const float u = unit(h), v = unit2(h);
-  const float r = std::sqrt(u), phi = 2.0f * kPi * v;
-  glm::vec3 t, b;
-  basis(n, t, b);
-  const float z = std::sqrt(std::max(0.0f, 1.0f - u));
-  return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
+  return cosine_direction(n, unit(h), unit2(h));
 }
 
 glm::vec3 cone_dir(const glm::vec3& axis, float cos_max, uint64_t h) {
@@ -58,7 +45,7 @@ glm::vec3 cone_dir(const glm::vec3& axis, float cos_max, uint64_t h) {
   const float s = std::sqrt(std::max(0.0f, 1.0f - c * c));
   const float phi = 2.0f * kPi * unit2(h);
   glm::vec3 t, b;
-  basis(axis, t, b);
+  orthonormal_basis(axis, t, b);
   return glm::normalize(t * (s * std::cos(phi)) + b * (s * std::sin(phi)) + axis * c);
 }
 
@@ -71,7 +58,7 @@ float spot_solid_angle(const Light& light) {
     const float c = 1.0f - (static_cast<float>(i) + 0.5f) / kSteps * (1.0f - cos_outer);
     const float s = std::sqrt(std::max(0.0f, 1.0f - c * c));
     glm::vec3 t, b;
-    basis(light.direction, t, b);
+    orthonormal_basis(light.direction, t, b);
     sum += spot_attenuation(light, light.direction * c + t * s);
   }
   return static_cast<float>(2.0 * kPi * (1.0 - cos_outer) * sum / kSteps);
@@ -393,7 +380,7 @@ void PhotonGroup::trace_path(uint32_t path, Trace& out) const {
       const float r = beam_radius(scene_.bounds_min, scene_.bounds_max);
       const glm::vec3 c = 0.5f * (scene_.bounds_min + scene_.bounds_max);
       glm::vec3 t, b;
-      basis(l.direction, t, b);
+      orthonormal_basis(l.direction, t, b);
       const float rr = r * std::sqrt(unit(hd)), phi = 2.0f * kPi * unit2(hd);
       origin = c - l.direction * (2.0f * r) + t * (rr * std::cos(phi)) + b * (rr * std::sin(phi));
       dir = l.direction;

@@ -58,23 +58,6 @@ struct Stream {
   }
 };
 
-// Orthonormal basis around unit w (Duff et al. 2017).
-void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
-  const float sign = std::copysign(1.0f, w.z);
-  const float a = -1.0f / (sign + w.z);
-  const float c = w.x * w.y * a;
-  t = glm::vec3(1.0f + sign * w.x * w.x * a, sign * c, -sign * w.x);
-  b = glm::vec3(c, sign + w.y * w.y * a, -w.y);
-}
-
-glm::vec3 cosine_direction(const glm::vec3& n, float u, float v) {
-  const float r = std::sqrt(u), phi = 2.0f * kPi * v;
-  glm::vec3 t, b;
-  basis(n, t, b);
-  const float z = std::sqrt(std::max(0.0f, 1.0f - u));
-  return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
-}
-
 struct LitLight {
   const Light* light;
   glm::vec3 radiant;  // colour * intensity of the state

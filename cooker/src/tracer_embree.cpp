@@ -13,6 +13,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "lightpatch/cooker/error.h"
@@ -48,38 +49,20 @@ class EmbreeTracer;
 
 // Embree's packet types and calls by width, so one template serves 4, 8 and 16.
 template <int W>
-struct Packet;
-template <>
-struct Packet<4> {
-  using RayHit = RTCRayHit4;
-  using Ray = RTCRay4;
+struct Packet {
+  static_assert(W == 4 || W == 8 || W == 16);
+  using RayHit =
+      std::conditional_t<W == 4, RTCRayHit4, std::conditional_t<W == 8, RTCRayHit8, RTCRayHit16>>;
+  using Ray = std::conditional_t<W == 4, RTCRay4, std::conditional_t<W == 8, RTCRay8, RTCRay16>>;
   static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-    rtcIntersect4(v, s, c, r);
+    if constexpr (W == 4) rtcIntersect4(v, s, c, r);
+    if constexpr (W == 8) rtcIntersect8(v, s, c, r);
+    if constexpr (W == 16) rtcIntersect16(v, s, c, r);
   }
   static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
-    rtcOccluded4(v, s, c, r);
-  }
-};
-template <>
-struct Packet<8> {
-  using RayHit = RTCRayHit8;
-  using Ray = RTCRay8;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-    rtcIntersect8(v, s, c, r);
-  }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
-    rtcOccluded8(v, s, c, r);
-  }
-};
-template <>
-struct Packet<16> {
-  using RayHit = RTCRayHit16;
-  using Ray = RTCRay16;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-    rtcIntersect16(v, s, c, r);
-  }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
-    rtcOccluded16(v, s, c, r);
+    if constexpr (W == 4) rtcOccluded4(v, s, c, r);
+    if constexpr (W == 8) rtcOccluded8(v, s, c, r);
+    if constexpr (W == 16) rtcOccluded16(v, s, c, r);
   }
 };
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "direct_light.h"
+#include "indirect_test_scenes.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/tracer.h"
 #include "test_scenes.h"
@@ -209,22 +210,11 @@ TEST(DirectLight, SphereLightGivesPenumbraAndMatchesPointFarAway) {
 }
 
 TEST(DirectLight, EmissiveSquareOverPointMatchesFormFactor) {
-  Scene scene;
-  Material plain;
-  Material glow;
-  glow.emissive = glm::vec3(1.0f);
-  scene.materials = {plain, glow};
-  add_quad(scene, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
-  // A 2 x 2 emitter 1 m above the texel, facing down.
-  add_quad(scene, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}, "panel", -1, 1);
-  test::finish(scene);
+  const Scene scene = test::emissive_panel(glm::vec3(1.0f), 0.8f);
   const TexelSet texels =
       grid_texels(1, 1, {-1e-3f, 0, -1e-3f}, {2e-3f, 0, 0}, {0, 0, 2e-3f}, {0, 1, 0});
   const BakedMaps maps = bake(scene, texels, 16384);
-  // Parallel rectangle over a corner (a = b = c = 1): F = (1/pi) * (1/sqrt2) * atan(1/sqrt2);
-  // the centre sees four such; E = pi * L * F_total.
-  const double fc = (1.0 / M_PI) * (1.0 / std::sqrt(2.0)) * std::atan(1.0 / std::sqrt(2.0));
-  const double want = M_PI * 4.0 * fc;
+  const double want = test::emissive_panel_irradiance(1.0);
   const double got = maps.base.at(0, 0, 1);
   std::printf("emissive: got %.5f want %.5f (error %.3g)\n", got, want,
               std::fabs(got - want) / want);

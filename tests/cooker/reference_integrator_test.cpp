@@ -159,23 +159,13 @@ TEST(ReferenceIntegrator, ReceiversInsideALightSphereGetPiL) {
 
 // A 2 x 2 emitter 1 m above the texel, facing down (emitter black, so nothing bounces back).
 TEST(ReferenceIntegrator, EmissiveSquareMatchesFormFactor) {
-  Scene scene;
-  Material plain;
-  Material glow;
-  glow.albedo = glm::vec3(0.0f);
-  glow.emissive = glm::vec3(1.0f, 2.0f, 0.5f);
-  scene.materials = {plain, glow};
-  add_quad(scene, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
-  add_quad(scene, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}, "panel", -1, 1);
-  test::finish(scene);
+  const glm::vec3 radiance(1.0f, 2.0f, 0.5f);
+  const Scene scene = test::emissive_panel(radiance, 0.0f);
   const TexelSet texels =
       grid_texels(1, 1, {-1e-3f, 0, -1e-3f}, {2e-3f, 0, 0}, {0, 0, 2e-3f}, {0, 1, 0});
   const ReferenceBake r = trace(scene, texels, 8192);
-  // Parallel rectangle over a corner (a = b = c = 1): F = (1/pi) (1/sqrt2) atan(1/sqrt2); the
-  // centre sees four; E = pi L F_total.
-  const double fc = (1.0 / M_PI) * (1.0 / std::sqrt(2.0)) * std::atan(1.0 / std::sqrt(2.0));
   for (int c = 0; c < 3; ++c) {
-    const double want = M_PI * 4.0 * fc * glow.emissive[c];
+    const double want = test::emissive_panel_irradiance(radiance[c]);
     const double got = r.map.at(0, 0, c), se = r.std_error.at(0, 0, c);
     std::printf("reference, emissive square channel %d: %.5f vs %.5f (%+.3f %%, se %.3f %%)\n", c,
                 got, want, 100.0 * (got - want) / want, 100.0 * se / want);
@@ -189,7 +179,7 @@ TEST(ReferenceIntegrator, EmissiveSquareMatchesFormFactor) {
 // seeds' maps, per texel, averaged, matches the mean squared standard error.
 TEST(ReferenceIntegrator, StandardErrorMatchesTheSpreadOfSeeds) {
   Scene s = test::furnace_box(0.6f);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  s.lights = {test::furnace_lamp()};
   const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, 5);
   constexpr int kSeeds = 8;
   const size_t count = texels.position.size();
@@ -220,7 +210,7 @@ TEST(ReferenceIntegrator, StandardErrorMatchesTheSpreadOfSeeds) {
 // same as asking for that many samples.
 TEST(ReferenceIntegrator, NoiseTargetStopsAtThePowerOfTwoThatMeetsIt) {
   Scene s = test::furnace_box(0.5f);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  s.lights = {test::furnace_lamp()};
   const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, 4);
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
@@ -245,7 +235,7 @@ TEST(ReferenceIntegrator, NoiseTargetStopsAtThePowerOfTwoThatMeetsIt) {
 
 TEST(ReferenceIntegrator, SameBitsOnAnyThreadCountDifferentSeedsDiffer) {
   Scene s = test::furnace_box(0.7f);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  s.lights = {test::furnace_lamp()};
   Light soft = test::point_light("globe", {-0.4f, -0.3f, 0.5f}, 2.0f);
   soft.radius = 0.2f;
   s.lights.push_back(soft);

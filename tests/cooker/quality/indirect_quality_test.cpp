@@ -18,7 +18,7 @@ constexpr double kPi = 3.14159265358979;
 
 double furnace_flux(float rho, int n) {
   Scene s = test::furnace_box(rho);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  s.lights = {test::furnace_lamp()};
   const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
   auto tracer = make_embree_tracer(s);
   Progress progress(true);

@@ -26,7 +26,7 @@ struct Furnace {
 // A closed 2 m box of albedo rho, a 1 cd point light off its centre, n x n texels per face.
 Furnace furnace(float rho, int n, int samples) {
   Scene s = test::furnace_box(rho);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  s.lights = {test::furnace_lamp()};
   const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
