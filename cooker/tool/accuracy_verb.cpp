@@ -604,6 +604,7 @@ int verb_accuracy(Args& args) {
     ref_options.photons = p.photons * factor;
     ref_options.virtual_lights = p.virtual_lights * factor;
     ref_options.area_samples = 64 * factor;
+    ref_options.gather_rays = gather_preset(prod).rays * factor;
     ref_options.seed = o.seed + kReferenceSeedOffset;
     ref_options.threads = o.threads;
   }
@@ -647,6 +648,8 @@ int verb_accuracy(Args& args) {
       hasher.value(ref_options.photons);
       hasher.value(ref_options.virtual_lights);
       hasher.value(ref_options.area_samples);
+      hasher.value(ref_options.gather_rays);
+      hasher.value(ref_options.integrator);
       hasher.value(ref_options.seed);
     }
   }

@@ -60,6 +60,19 @@ CookOptions parse_common(Args& args, const char* output_what) {
   args.option("--report", &o.report_path);
   // Indirect light and sampling: overrides of the quality preset (0 keeps the preset's value).
   o.bake.indirect = !args.flag("--no-indirect");
+  std::string integrator;
+  if (args.option("--integrator", &integrator)) {
+    try {
+      o.bake.integrator = parse_integrator(integrator);
+    } catch (const CookError& e) {
+      throw ArgsError(e.what());
+    }
+  }
+  o.bake.gather_rays = args.int_option("--gather-rays", 0, 1, 65536);
+  o.bake.indirect_level = args.int_option("--indirect-level", 0, 1, 8);
+  if (o.bake.indirect_level != 0 && (o.bake.indirect_level & (o.bake.indirect_level - 1)) != 0)
+    throw ArgsError("--indirect-level must be 1, 2, 4 or 8");
+  o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
   o.bake.photons = args.int_option("--photons", 0, 1, 100'000'000);
   o.bake.virtual_lights = args.int_option("--virtual-lights", 0, 1, 1'000'000);
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
@@ -249,9 +262,26 @@ std::string std_error_path(const std::string& map_path) {
 }
 
 int verb_bake_state(Args& args) {
-  std::string state_path, integrator = "cook", std_error_out;
+  std::string state_path, std_error_out;
   args.option("--state", &state_path);
-  if (!args.option("--integrator", &integrator)) integrator = "cook";
+  // --integrator reference is bake-state's own; the cook's integrators (gather, photons) go on to
+  // parse_common.
+  bool reference = false;
+  for (size_t i = 0; i < args.items.size(); ++i) {
+    const std::string& item = args.items[i];
+    std::string value;
+    if (item.rfind("--integrator=", 0) == 0) value = item.substr(13);
+    if (item == "--integrator" && i + 1 < args.items.size()) value = args.items[i + 1];
+    if (item != "--integrator" && item.rfind("--integrator=", 0) != 0) continue;
+    if (value != "gather" && value != "photons" && value != "reference") {
+      throw ArgsError("--integrator must be gather, photons or reference, got '" + value + "'");
+    }
+    reference = value == "reference";
+  }
+  if (reference) {
+    std::string ignored;
+    args.option("--integrator", &ignored);
+  }
   ReferenceOptions ref;
   ref.samples = args.int_option("--samples", 0, 2, 1 << 20);
   const bool has_samples = ref.samples != 0;
@@ -262,10 +292,6 @@ int verb_bake_state(Args& args) {
   CookOptions o = parse_common(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
-  const bool reference = integrator == "reference";
-  if (!reference && integrator != "cook") {
-    throw ArgsError("--integrator must be cook or reference, got '" + integrator + "'");
-  }
   if (!reference && (has_samples || has_std_error || target_percent > 0.0f)) {
     throw ArgsError("--samples, --target-noise and --std-error need --integrator reference");
   }

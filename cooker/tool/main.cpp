@@ -22,15 +22,25 @@ constexpr const char* kCookOptionsHelp =
     "  --texels-per-unit F    texel density in texels per metre (default: about 160k surface\n"
     "                         texels, a page near 512x512; lowered with a note if the charts do\n"
     "                         not fit a 4096 page)\n"
-    "  --quality Q            draft | preview (default) | production: photons, virtual lights,\n"
-    "                         area-light samples and gather quality\n"
-    "  --no-indirect          direct light only (no photons, no bounce)\n"
+    "  --quality Q            draft | preview (default) | production: gather rays, indirect\n"
+    "                         level and denoising, area-light samples (photon presets for\n"
+    "                         --integrator photons)\n"
+    "  --no-indirect          direct light only (no bounce)\n"
+    "  --integrator I         gather (default): final gathering on coarse texels, bounces by\n"
+    "                         iteration, a geometry-guided denoiser; photons: photons merged into\n"
+    "                         virtual indirect lights\n"
+    "  --gather-rays N        rays per coarse texel (preset: draft 64, preview 256, production\n"
+    "                         1024)\n"
+    "  --indirect-level K     bounce light computed on K x K texel blocks: 1, 2, 4 or 8 (preset:\n"
+    "                         draft 4, preview 2, production 2)\n"
+    "  --denoise N            a-trous denoising passes over the bounce light, 0 = none (preset:\n"
+    "                         draft 2, preview 2, production 1)\n"
     "  --no-plan              force every effect on: indirect light for every light group that\n"
     "                         emits photons with every object's bounce, every light-object pair\n"
     "                         traced and kept, every measured overlap correction kept, tinted\n"
     "                         patches kept at 3 channels (for bake-state: every object's bounce)\n"
-    "  --photons N            photons for the whole scene (overrides the quality preset)\n"
-    "  --virtual-lights N     virtual indirect lights for the whole scene (overrides the preset)\n"
+    "  --photons N            photons for the whole scene (--integrator photons)\n"
+    "  --virtual-lights N     virtual indirect lights for the whole scene (--integrator photons)\n"
     "  --area-samples N       samples per texel for lights with a radius and emissive surfaces\n"
     "  --seed N               random seed (same scene, options and seed: same maps)\n"
     "  --threads N            worker threads (default: all cores)\n"
@@ -56,7 +66,7 @@ constexpr const char* kBakeStateHelp =
     "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
     "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
     "                         authored, all on and visible)\n"
-    "  --integrator I         cook (default): the cook's own integrator at --quality;\n"
+    "  --integrator I         gather (default) or photons: the cook's integrators (below);\n"
     "                         reference: unbiased path tracing from every texel (next-event\n"
     "                         estimation to every light, MIS for light spheres and emissive\n"
     "                         surfaces, Russian roulette), the independent reference; it also\n"
@@ -68,8 +78,8 @@ constexpr const char* kBakeStateHelp =
     "                         then the cap (default: off, all --samples)\n"
     "  --std-error ERR.pfm    reference: where the standard-error map goes (RGB, same units\n"
     "                         and layout as the map; default MAP.stderr.pfm beside MAP.pfm)\n"
-    "  (with --integrator reference, --seed and --threads apply; the quality, photon, virtual\n"
-    "  light and area-sample options do not)\n";
+    "  (with --integrator reference, --seed and --threads apply; the quality, gather, photon,\n"
+    "  virtual-light, denoise and area-sample options do not)\n";
 
 constexpr const char* kAccuracyHelp =
     "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
@@ -106,8 +116,9 @@ constexpr const char* kAccuracyHelp =
     "  --reference-noise P    path tracer: stop at the first power of two of samples (from 64)\n"
     "                         whose noise is at most P percent relative RMSE (default 0.5; 0 =\n"
     "                         all --reference-samples; off with --quick)\n"
-    "  --reference-scale K    --reference-integrator cook: photons, virtual lights and area\n"
-    "                         samples K times production's (1..16; default 4, 2 with --quick)\n"
+    "  --reference-scale K    --reference-integrator cook: gather rays, photons, virtual lights\n"
+    "                         and area samples K times production's (1..16; default 4, 2 with\n"
+    "                         --quick)\n"
     "  --runtime-csv OUT.csv  also the runtime: the encoding rows' bake packed with each\n"
     "                         encoding (auto, linear, square) and recomposed on the CPU reference\n"
     "                         (float32 target; median rebuild time), against the float "
@@ -124,11 +135,12 @@ const Verb kVerbs[] = {
     {"cook", lightpatch::tool::verb_cook,
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
-     "[--measure-plan] [--photons N] "
+     "[--measure-plan] [--integrator gather|photons] [--gather-rays N] [--indirect-level K] "
+     "[--denoise N] [--photons N] "
      "[--virtual-lights N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
-     "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator cook|reference] "
+     "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator gather|photons|reference] "
      "[--samples N] [--std-error ERR.pfm] [cook's options]",
      kBakeStateHelp},
     {"info", lightpatch::tool::verb_info, "info PACK [--json]",
