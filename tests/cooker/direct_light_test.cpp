@@ -264,7 +264,7 @@ TEST(DirectLight, SphereCosineIntegralMatchesQuadrature) {
       const glm::vec3 n(0, 0, 1);
       const glm::vec3 axis(std::sin(theta), 0, std::cos(theta));
       const glm::vec3 t(std::cos(theta), 0, -std::sin(theta)), b(0, 1, 0);
-      constexpr int kRings = 800, kSteps = 800;
+      constexpr int kRings = 300, kSteps = 300;
       const double cos_max = std::cos(double(sigma));
       double sum = 0.0;
       for (int i = 0; i < kRings; ++i) {

@@ -217,19 +217,21 @@ TEST(ReferenceIntegrator, NoiseTargetStopsAtThePowerOfTwoThatMeetsIt) {
   Report report;
   ReferenceOptions o;
   o.samples = 4096;
-  o.target_noise = 0.02;
+  o.target_noise = 0.05;
   const ReferenceBake early = bake_reference(s, texels, *tracer, {}, o, progress, report);
   EXPECT_GE(early.samples, 64);
   EXPECT_LT(early.samples, 4096);
   EXPECT_EQ(early.samples & (early.samples - 1), 0);
-  EXPECT_LE(early.rel_rmse_noise, 0.02);
+  EXPECT_LE(early.rel_rmse_noise, 0.05);
+  std::printf("noise target 5 %%: stopped at %d samples, noise %.3f %%\n", early.samples,
+              100.0 * early.rel_rmse_noise);
   ReferenceOptions fixed;
   fixed.samples = early.samples;
   const ReferenceBake same = bake_reference(s, texels, *tracer, {}, fixed, progress, report);
   EXPECT_TRUE(same.map.data == early.map.data);
   if (early.samples > 64) {
     fixed.samples = early.samples / 2;
-    EXPECT_GT(bake_reference(s, texels, *tracer, {}, fixed, progress, report).rel_rmse_noise, 0.02);
+    EXPECT_GT(bake_reference(s, texels, *tracer, {}, fixed, progress, report).rel_rmse_noise, 0.05);
   }
 }
 
