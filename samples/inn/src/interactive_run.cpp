@@ -132,7 +132,7 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     f.light_map = rt.light_map_texture();
     f.object_visible = visible.data();
     f.flame = flames.data();
-    f.exposure = o.exposure;
+    f.exposure = o.exposure * rt.light_map_scale();
     f.viewport_width = width;
     f.viewport_height = height;
     s.renderer.draw(f);

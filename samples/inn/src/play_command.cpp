@@ -36,10 +36,10 @@ void print_help(std::FILE* out) {
       "                     headless)\n"
       "  --budget TEXELS    texels recomposed per frame (default: half the light map's area)\n"
       "  --exposure F       multiplies the light map before tone mapping, > 0 (default: 1.5)\n"
-      "  --drift-ulps F     the planner's drift tolerance in half-float ulps, > 0; lower\n"
-      "                     rebuilds more often (default: 512)\n"
-      "  --cpu              recompose on the CPU reference path, as on devices without\n"
-      "                     half-float render targets (default: GLES when it can)\n"
+      "  --drift-ulps F     the planner's drift tolerance in half-float ulps (2^-11) of each\n"
+      "                     texel's magnitude, > 0; lower rebuilds more often (default: 2)\n"
+      "  --cpu              recompose on the runtime's CPU path, as on devices without\n"
+      "                     renderable float targets (default: GLES when it can)\n"
       "  -h, --help         this text\n");
 }
 

@@ -53,7 +53,7 @@ std::unique_ptr<PlaySession> open_session(const PlayOptions& options) {
     throw std::runtime_error(options.pack + ": " + error.message);
   }
   RuntimeLimits limits;
-  limits.planner.drift_tolerance_ulps = options.drift_ulps;
+  limits.planner.drift_tolerance = options.drift_ulps / 2048.0f;
   limits.force_cpu_fallback = options.force_cpu;
   if (s->runtime.open(s->pack, limits, &error) != Status::kOk) {
     throw std::runtime_error(options.pack + ": " + error.message);
