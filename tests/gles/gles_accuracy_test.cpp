@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "cooked_pack.h"
@@ -170,6 +171,60 @@ TEST_F(GlesAccuracy, CpuFallbackMatchesTheCpuReference) {
   RuntimeLimits limits;
   limits.force_cpu_fallback = true;
   run(limits, "cpu fallback");
+}
+
+// Sunlight at real values: a 100,000 lux directional light over a floor with a box, authored
+// as intensity 100,000 or as colour 100,000 (packs carry either), recomposes on GLES as on the
+// CPU (no clamp at the half-float maximum, no negative texel under the box), and a state beyond
+// what the runtime's map can hold is refused.
+TEST(Sunlight, RealLuxRecomposesTheSameOnGlesAndCpu) {
+  for (int authored_as_colour = 0; authored_as_colour < 2; ++authored_as_colour) {
+    testing::CookedPack c;
+    cooker::Scene& s = c.scene;
+    test::add_quad(s, {-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}, "ground");
+    test::add_object_box(s, {-0.5f, 0.0f, -0.5f}, {0.5f, 1.0f, 0.5f}, "crate");
+    cooker::Light sun = test::directional_light("sun", {0.3f, -1.0f, -0.4f}, 1.0e5f, true);
+    if (authored_as_colour) {
+      sun.color = {1.0e5f, 1.0e5f, 1.0e5f};
+      sun.intensity = 1.0f;
+    }
+    s.lights = {sun};
+    test::finish(s);
+    testing::cook_draft(c, 8.0f);
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+    testing::Recomposers r;
+    testing::open_recomposers(c.pack, RuntimeLimits{}, &r);
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+    // The smallest power of two that brings the authored bound to 4096 or below.
+    const float scaled = r.runtime.planner().wanted_map_bound() / r.runtime.light_map_scale();
+    EXPECT_LE(scaled, 4096.0f);
+    EXPECT_GT(scaled, 2048.0f);
+    Error error;
+    SceneState state;
+    ASSERT_EQ(state.init(c.pack, &error), Status::kOk);
+    const size_t n = size_t(r.runtime.width()) * r.runtime.height();
+    std::vector<float> rgba(n * 4), rgb(n * 3);
+    for (int visible = 1; visible >= 0; --visible) {
+      ASSERT_EQ(state.set_object_visible(0, visible != 0), Status::kOk);
+      ASSERT_EQ(r.runtime.set_object_visible(0, visible != 0), Status::kOk);
+      for (int frame = 0; frame < 100 && !r.runtime.idle(); ++frame)
+        ASSERT_EQ(r.runtime.update(kUnlimited), Status::kOk);
+      ASSERT_EQ(r.cpu.apply(state), Status::kOk);
+      ASSERT_EQ(r.runtime.read_light_map(rgba.data(), &error), Status::kOk) << error.message;
+      for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) rgb[i * 3 + size_t(k)] = rgba[i * 4 + size_t(k)];
+      const MapMetrics m = compare_maps(rgb.data(), r.cpu.rgb(), n * 3);
+      EXPECT_LE(m.relative_rmse, kMaxRelativeRmse);
+      EXPECT_LE(std::fabs(m.median_ratio - 1.0), kMaxMedianBias);
+      EXPECT_GE(m.min_value, 0.0);
+      const float peak = *std::max_element(rgb.begin(), rgb.end());
+      EXPECT_GT(peak, 80000.0f);  // lit ground near 100,000 * cos(25 deg), above 65,504
+      EXPECT_NEAR(peak, *std::max_element(r.cpu.rgb(), r.cpu.rgb() + n * 3), 1e-3 * peak);
+    }
+    const float white[3] = {1.0f, 1.0f, 1.0f};
+    EXPECT_EQ(r.runtime.set_light_color(0, white), Status::kOk);
+    EXPECT_EQ(r.runtime.set_light_intensity(0, 1.0e9f), Status::kOutOfRange);
+  }
 }
 
 }  // namespace
