@@ -260,7 +260,8 @@ TEST(NegativeLight, NoNegativeTexelInAnyRecomposition) {
         ASSERT_GE(rgba[i * 4 + size_t(k)], 0.0f) << "gles, trial " << trial << ", texel " << i;
   }
   std::printf("unclamped minimum %.3g where the floor peaks at %.4g\n", raw_min, floor_peak);
-  EXPECT_LT(raw_min, -1e-3 * floor_peak);  // the case the clamp is for exists in this scene
+  // The case the clamp is for exists in this scene (well beyond float rounding of the sum).
+  EXPECT_LT(raw_min, -1e-6 * floor_peak);
 }
 
 // Overlapping shadows are exact: all four visibility combinations of the two objects, CPU and
