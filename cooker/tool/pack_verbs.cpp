@@ -203,7 +203,7 @@ int verb_recompose(Args& args) {
   args.option("--state", &state_path);
   args.option("--states", &states_path);
   if (!args.option("--backend", &backend)) backend = "cpu";
-  args.option("-o", &output);
+  if (!args.option("-o", &output)) args.option("--output", &output);
   const std::string path = args.positional("PACK");
   args.finish();
   if (output.empty()) throw ArgsError("-o MAP.pfm is required");
