@@ -7,6 +7,7 @@
 #include "lightpatch/cooker/unwrap.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -450,20 +451,23 @@ std::vector<SeamEdge> find_seams(const Scene& scene, const Layout& layout) {
   for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
     const MeshInstance& m = scene.meshes[mi];
     const MeshLayout& ml = layout.meshes[mi];
-    // Source edge (sorted) -> first (layout start, layout end) seen, oriented as the source edge.
-    std::map<std::pair<uint32_t, uint32_t>, std::pair<uint32_t, uint32_t>> first;
+    if (ml.indices.empty()) continue;  // not in the light map
+    // Source edge (sorted) -> the first triangle's layout vertices: edge start, edge end (oriented
+    // as the source edge) and the opposite corner.
+    std::map<std::pair<uint32_t, uint32_t>, std::array<uint32_t, 3>> first;
     for (size_t t = 0; t < m.indices.size() / 3; ++t)
       for (int k = 0; k < 3; ++k) {
         uint32_t s0 = m.indices[3 * t + k], s1 = m.indices[3 * t + (k + 1) % 3];
         uint32_t l0 = ml.indices[3 * t + k], l1 = ml.indices[3 * t + (k + 1) % 3];
+        const uint32_t l2 = ml.indices[3 * t + (k + 2) % 3];
         if (s0 > s1) {
           std::swap(s0, s1);
           std::swap(l0, l1);
         }
-        auto [it, inserted] = first.emplace(std::make_pair(s0, s1), std::make_pair(l0, l1));
-        if (inserted || (it->second.first == l0 && it->second.second == l1)) continue;
-        seams.push_back(
-            SeamEdge{ml.uv[it->second.first], ml.uv[it->second.second], ml.uv[l0], ml.uv[l1]});
+        auto [it, inserted] = first.emplace(std::make_pair(s0, s1), std::array{l0, l1, l2});
+        const auto& [f0, f1, f2] = it->second;
+        if (inserted || (f0 == l0 && f1 == l1)) continue;
+        seams.push_back(SeamEdge{ml.uv[f0], ml.uv[f1], ml.uv[l0], ml.uv[l1], ml.uv[f2], ml.uv[l2]});
       }
   }
   return seams;

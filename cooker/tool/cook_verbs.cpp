@@ -143,18 +143,10 @@ double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-void finalize_maps(BakedMaps& maps, const Prepared& p, Progress& progress, Report& report) {
-  progress.begin("finalize maps", 1 + maps.contribution.size() + maps.shadows.size());
-  finalize_map(maps.base, p.scene, p.layout, p.texels);
-  progress.advance();
-  for (FloatImage& c : maps.contribution) {
-    finalize_map(c, p.scene, p.layout, p.texels);
-    progress.advance();
-  }
-  for (ShadowMap& s : maps.shadows) {
-    finalize_map(s.map, p.scene, p.layout, p.texels);
-    progress.advance();
-  }
+void finalize_all(BakedMaps& maps, const Prepared& p, Progress& progress, Report& report) {
+  progress.begin("finalize maps", 1 + maps.contribution.size() + maps.shadows.size() +
+                                      maps.pair_corrections.size() + maps.static_shadows.size());
+  finalize_maps(maps, p.scene, p.layout, p.texels, &progress);
   report.stage_time("finalize", progress.end());
 }
 
@@ -162,7 +154,7 @@ void finalize_maps(BakedMaps& maps, const Prepared& p, Progress& progress, Repor
 std::vector<uint8_t> rebake(const BakeOptions& bake, const Prepared& p, Progress& progress,
                             Report& report) {
   BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, bake, progress, report);
-  finalize_maps(maps, p, progress, report);
+  finalize_all(maps, p, progress, report);
   PackOptions po;
   po.keep_colour = !bake.plan_effects;
   return timed(progress, report, "pack",
@@ -216,7 +208,7 @@ int verb_cook(Args& args) {
   Report report;
   Prepared p = prepare(o, progress, report);
   BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, o.bake, progress, report);
-  finalize_maps(maps, p, progress, report);
+  finalize_all(maps, p, progress, report);
   PackOptions po;
   po.keep_colour = !o.bake.plan_effects;
   const std::vector<uint8_t> pack = timed(

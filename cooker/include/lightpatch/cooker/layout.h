@@ -39,6 +39,7 @@ struct Region {
 struct SeamEdge {
   glm::vec2 a0, a1;  // the edge in the first chart
   glm::vec2 b0, b1;  // the same edge in the second chart (b0 is the same point as a0)
+  glm::vec2 a2, b2;  // the opposite corner of the edge's triangle in each chart (its inside)
 };
 
 struct LayoutOptions {
