@@ -48,6 +48,17 @@ CookOptions parse_common(Args& args, const char* output_what) {
   if (o.output.empty()) throw ArgsError("-o needs a file name");
   o.layout.lightmap_size = args.int_option("--lightmap-size", 0, 8, 16384);
   o.layout.texels_per_unit = args.float_option("--texels-per-unit", 0.0f, 1e-6f, 1e6f);
+  std::string unwrap;
+  if (args.option("--unwrap", &unwrap)) {
+    if (unwrap == "auto")
+      o.layout.unwrap = UnwrapMode::kAuto;
+    else if (unwrap == "always")
+      o.layout.unwrap = UnwrapMode::kAlways;
+    else if (unwrap == "never")
+      o.layout.unwrap = UnwrapMode::kNever;
+    else
+      throw ArgsError("--unwrap takes auto, always or never, not '" + unwrap + "'");
+  }
   std::string quality;
   if (args.option("--quality", &quality)) {
     try {
@@ -109,6 +120,12 @@ Prepared prepare(const CookOptions& o, Progress& progress, Report& report) {
   for (uint8_t v : p.texels.valid) valid += v ? 1 : 0;
   int semi_lights = 0;
   for (const Light& l : p.scene.lights) semi_lights += l.semi_dynamic ? 1 : 0;
+  if (semi_lights == 0 && p.scene.objects.empty())
+    progress.message(
+        "note: the scene marks no light or object semi-dynamic (a node's extras "
+        "\"semiDynamic\": true), so everything is baked static and nothing can change at run "
+        "time. Blender writes custom properties only with Include > Custom Properties on in its "
+        "glTF export (off by default)");
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& s = report.root()["scene"];
   s["path"] = o.scene_path;
@@ -123,6 +140,8 @@ Prepared prepare(const CookOptions& o, Progress& progress, Report& report) {
   l["height"] = p.layout.height;
   l["texels_per_unit"] = p.layout.texels_per_unit;
   l["verbatim_uv1"] = p.layout.verbatim_uv1;
+  l["uv1_regions"] = p.layout.uv1_regions;
+  l["unwrapped_regions"] = p.layout.unwrapped_regions;
   l["regions"] = p.layout.regions.size();
   l["notes"] = p.layout.notes;
   l["texels"] = p.texels.position.size();
