@@ -365,6 +365,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       m.record.node_index = mi.node_index < 0 ? 0xFFFFFFFFu : uint32_t(mi.node_index);
       m.record.primitive = uint32_t(mi.primitive_index);
       m.record.object = mi.object < 0 ? kNone16 : uint16_t(mi.object);
+      if (ml.from_uv1) {
+        m.record.flags = kMeshFlagTexcoord1;
+        for (int k = 0; k < 4; ++k) m.record.lightmap_scale_offset[k] = ml.uv1_scale_offset[k];
+      }
       // Vertices name the glTF vertex: the importer's unwelded vertex maps back to it.
       for (size_t v = 0; v < ml.uv.size(); ++v) {
         const uint32_t src = ml.source_vertex[v];

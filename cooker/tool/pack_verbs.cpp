@@ -113,6 +113,23 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   }
   j["atlases"] = atlases;
   j["meshes"] = p.mesh_count();
+  // Each baked mesh instance; those laid out by their own TEXCOORD_1 with the scale and offset a
+  // game applies to it (uv = TEXCOORD_1 * xy + zw).
+  nlohmann::ordered_json instances = nlohmann::ordered_json::array();
+  for (uint32_t i = 0; i < p.mesh_count(); ++i) {
+    const pack::MeshRecord& m = p.mesh(i);
+    nlohmann::ordered_json e = {{"name", name_string(p.mesh_name(i))},
+                                {"node", m.node_index},
+                                {"primitive", m.primitive},
+                                {"vertices", m.vertex_count},
+                                {"triangles", m.index_count / 3}};
+    if (m.flags & pack::kMeshFlagTexcoord1) {
+      const float* so = m.lightmap_scale_offset;
+      e["lightmap_scale_offset"] = {so[0], so[1], so[2], so[3]};
+    }
+    instances.push_back(e);
+  }
+  j["mesh_instances"] = instances;
   nlohmann::ordered_json sections = nlohmann::ordered_json::object();
   const pack::SectionEntry* entries =
       reinterpret_cast<const pack::SectionEntry*>(p.bytes() + sizeof(pack::Header));
