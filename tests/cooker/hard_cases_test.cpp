@@ -459,6 +459,40 @@ TEST(HardCases, ThinPlankThroughAnObjectIsDarkWhereverFilteringReadsIt) {
   }
 }
 
+// Light-map UVs of each box's own in [0,1]: its 6 faces in a 3 x 2 grid of cells (the face's
+// corners in add_box order).
+void box_texcoord1(MeshInstance& m) {
+  m.uv1.resize(m.positions.size());
+  const glm::vec2 corner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const size_t face = v / 4;
+    const glm::vec2 cell(float(face % 3) / 3.0f, float(face / 3) / 2.0f);
+    m.uv1[v] = cell + (glm::vec2(0.03f) + corner[v % 4] * 0.27f) * glm::vec2(1.0f, 1.5f);
+  }
+}
+
+TEST(HardCases, PerMeshTexcoord1ScenesRecomposeLikeBakeState) {
+  // Every mesh with light-map UVs of its own over the unit square, as Blender's Lightmap Pack,
+  // Unity and Godot write them: each placed by a scale and offset; bounce light on.
+  Cooked c;
+  Scene& s = c.scene;
+  add_floor(s);
+  s.meshes[0].uv1 = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+  box_texcoord1(
+      s.meshes[size_t(test::add_box(s, {0.8f, 0.0f, 0.8f}, {1.4f, 0.9f, 1.4f}, "cupboard"))]);
+  const int chest = test::add_object_box(s, {-1.0f, 0.0f, -0.6f}, {-0.4f, 0.5f, 0.0f}, "chest");
+  box_texcoord1(s.meshes[size_t(s.objects[size_t(chest)].meshes[0])]);
+  s.lights = {test::point_light("lamp", {0.2f, 2.0f, 0.1f}, 10.0f, true),
+              test::spot_light("spot", {-1.5f, 2.5f, 1.5f}, glm::normalize(glm::vec3(1, -2, -1)),
+                               20.0f, 0.4f, 0.8f)};
+  test::finish(s);
+  cook(c, 96, draft(true));
+  ASSERT_FALSE(HasFatalFailure());
+  EXPECT_EQ(c.layout.uv1_regions, 3);
+  EXPECT_FALSE(c.layout.verbatim_uv1);
+  RecordProperty("worst_relative_rmse", std::to_string(expect_standard_states_match(c)));
+}
+
 // ---------------------------------------------------------------------------------------------
 // One room at k times its size: a floor, a back wall, a crate, a semi-dynamic point light and a
 // static spot (both in candela), so every map, indirect light included, scales by 1 / k².
