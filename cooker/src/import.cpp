@@ -718,6 +718,7 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
     mi.node_index = node;
     mi.primitive_index = int(p);
     mi.object = object;
+    mi.world = world;
     mi.lightmap_scale = density;
     mi.lightmap_exclude = exclude;
     if (prim.material >= 0) {

@@ -12,6 +12,7 @@
 #include "args.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/gltf_writer.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/io.h"
 #include "lightpatch/cooker/pack_builder.h"
@@ -21,6 +22,7 @@
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
+#include "preview_image.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -214,6 +216,8 @@ void measure_plan(const CookOptions& o, const Prepared& p, Progress& progress, R
 
 int verb_cook(Args& args) {
   const bool measure = args.flag("--measure-plan");
+  std::string gltf_path;
+  args.option("--write-gltf", &gltf_path);
   CookOptions o = parse_common(args, "OUT.lpk");
   o.scene_path = args.positional("SCENE");
   args.finish();
@@ -223,6 +227,7 @@ int verb_cook(Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  if (!gltf_path.empty()) probe_output_folder(gltf_path);
   Progress progress(o.quiet);
   Report report;
   Prepared p = prepare(o, progress, report);
@@ -234,6 +239,10 @@ int verb_cook(Args& args) {
       progress, report, "pack", [&] { return build_pack(p.scene, p.layout, maps, po, report); });
   progress.begin("write", 1);
   write_file_atomic(o.output, pack.data(), pack.size());
+  if (!gltf_path.empty()) {
+    const std::vector<uint8_t> glb = gltf_with_lightmap_uvs(o.scene_path, p.scene, p.layout);
+    write_file_atomic(gltf_path, glb.data(), glb.size());
+  }
   report.stage_time("write", progress.end());
   const double cook_s = since(t0);
   progress.message("wrote " + o.output + " (" + std::to_string(pack.size()) + " bytes, " +
@@ -251,12 +260,16 @@ int verb_cook(Args& args) {
 int verb_bake_state(Args& args) {
   std::string state_path;
   args.option("--state", &state_path);
+  const PreviewOptions picture = parse_preview_options(args, "--png");
+  if (picture.view == PreviewView::kAtlases)
+    throw ArgsError("--view atlases shows a pack's atlases: use lightpatch preview");
   CookOptions o = parse_common(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
   const auto t0 = std::chrono::steady_clock::now();
   const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
   probe_output_folder(o.output);
+  if (!picture.png.empty()) probe_output_folder(picture.png);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   Progress progress(o.quiet);
   Report report;
@@ -268,6 +281,7 @@ int verb_bake_state(Args& args) {
   report.stage_time("finalize", progress.end());
   progress.begin("write", 1);
   write_pfm(o.output, map);
+  if (!picture.png.empty()) write_preview(picture, map, layout_charts(p.scene, p.layout), nullptr);
   report.stage_time("write", progress.end());
   finish_report(o, report, since(t0));
   progress.message("wrote " + o.output + " (" + std::to_string(map.width) + "x" +

@@ -43,6 +43,24 @@ constexpr const char* kCookOptionsHelp =
     "  --report REPORT.json   write the cook's decisions, timings and measured errors\n"
     "  -q, --quiet            no progress on stderr\n";
 
+// The picture options of `preview` and `bake-state --png` (preview_image.h).
+#define LIGHTPATCH_PREVIEW_HELP                                                                   \
+  "  --view V               lightmap (default): the light map tone-mapped to sRGB, the 99th\n"    \
+  "                         percentile white, negative texels magenta; atlases (preview only):\n" \
+  "                         every atlas's R, G, B and A planes in grey, side by side; charts:\n"  \
+  "                         each mesh instance's charts in a colour of its own (semi-dynamic\n"   \
+  "                         objects saturated, static meshes pale) shaded by the light;\n"        \
+  "                         checker: the same colours in a texel checker, a texture that shows\n" \
+  "                         the texel density on a model through its light-map UVs\n"             \
+  "  --exposure E           factor on the automatic exposure (default 1)\n"                       \
+  "  --zoom N               pixels per texel, 1..16 (default 1)\n"
+constexpr const char* kPreviewHelp =
+    "Writes a picture of what a pack holds (PNG), from the CPU reference recomposition.\n\n"
+    "options:\n"
+    "  -o, --output OUT.png   the picture (written atomically)\n"
+    "  --state STATE.json     the state to recompose (default: as "
+    "authored)\n" LIGHTPATCH_PREVIEW_HELP;
+
 constexpr const char* kCookHelp =
     "Bakes a glTF 2.0 scene (.gltf/.glb) into a pack: base map, per-light contribution maps,\n"
     "per-object shadow maps and pair corrections, quantized to 8-bit RGBA atlases.\n"
@@ -51,6 +69,9 @@ constexpr const char* kCookHelp =
     "light map.\n\n"
     "options:\n"
     "  -o, --output OUT.lpk   the pack (written atomically; an existing file survives a failure)\n"
+    "  --write-gltf OUT.glb   also the scene written back with the light-map UVs the cook used\n"
+    "                         in TEXCOORD_1 (uncompressed; buffers and images embedded), so any\n"
+    "                         glTF loader draws it with the runtime's light map\n"
     "  --measure-plan         after the cook, bake and pack twice more, not written: with\n"
     "                         --no-plan, then as planned (both timed warm), and add to the\n"
     "                         report a \"plan\" object: seconds, rays, bytes and\n"
@@ -63,7 +84,9 @@ constexpr const char* kBakeStateHelp =
     "options:\n"
     "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
     "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
-    "                         authored, all on and visible)\n";
+    "                         authored, all on and visible)\n"
+    "  --png OUT.png          also a picture of the map (the options "
+    "below)\n" LIGHTPATCH_PREVIEW_HELP;
 
 constexpr const char* kAccuracyHelp =
     "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
@@ -107,7 +130,7 @@ const Verb kVerbs[] = {
     {"cook", lightpatch::tool::verb_cook,
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
-     "[--measure-plan] [--photons N] "
+     "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--photons N] "
      "[--virtual-lights N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
@@ -127,6 +150,10 @@ const Verb kVerbs[] = {
      "  --states STATES.jsonl  states applied in order through the incremental path; the map\n"
      "                         after the last is written\n"
      "  --backend cpu|gles     CPU reference (default) or OpenGL ES 3 through EGL surfaceless\n"},
+    {"preview", lightpatch::tool::verb_preview,
+     "preview PACK [--state STATE.json] -o OUT.png [--view lightmap|atlases|charts|checker] "
+     "[--exposure E] [--zoom N]",
+     kPreviewHelp},
     {"bench", lightpatch::tool::verb_bench, "bench PACK [--json]",
      "Times the GLES recomposition of a pack (full rebuild, single changes) against a fill-rate\n"
      "floor measured in the same run, and lists the GPU memory it holds.\n\n"

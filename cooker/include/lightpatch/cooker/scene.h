@@ -42,6 +42,7 @@ struct MeshInstance {
   // The glTF vertex (of the primitive's attributes) behind each vertex, where the importer
   // unwelded the primitive (no normals: one vertex per triangle corner); empty: the same index.
   std::vector<uint32_t> gltf_vertex;
+  glm::mat4 world{1.0f};          // the node's world transform (positions are already in it)
   float lightmap_scale = 1.0f;    // the node's extras.lightmapScale: texel density factor, > 0
   bool lightmap_exclude = false;  // the node's extras.lightmapExclude: an occluder, not baked
 };
