@@ -528,6 +528,13 @@ float extras_density(const tinygltf::Value& extras, const std::string& where) {
   return static_cast<float>(k);
 }
 
+// A flag whose absence means `absent` (castShadows: only an explicit false turns it off).
+bool extras_flag_or(const tinygltf::Value& extras, const char* key, bool absent,
+                    const std::string& where) {
+  if (!extras.IsObject() || !extras.Has(key)) return absent;
+  return extras_flag(extras, key, where);
+}
+
 int Importer::texture_for(int gltf_texture) {
   if (gltf_texture < 0 || size_t(gltf_texture) >= model_.textures.size())
     throw CookError(err("material refers to missing texture " + std::to_string(gltf_texture)));
@@ -717,6 +724,7 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
     mi.name = n.name;
     mi.node_index = node;
     mi.primitive_index = int(p);
+    mi.cast_shadows = extras_flag_or(n.extras, "castShadows", true, where);
     mi.object = object;
     mi.world = world;
     mi.lightmap_scale = density;
