@@ -13,6 +13,7 @@
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/cook.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/gltf_writer.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/io.h"
 #include "lightpatch/cooker/pack_builder.h"
@@ -23,6 +24,7 @@
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
+#include "preview_image.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -50,6 +52,17 @@ CookOptions parse_common(Args& args, const char* output_what) {
   if (o.output.empty()) throw ArgsError("-o needs a file name");
   o.layout.lightmap_size = args.int_option("--lightmap-size", 0, 8, 16384);
   o.layout.texels_per_unit = args.float_option("--texels-per-unit", 0.0f, 1e-6f, 1e6f);
+  std::string unwrap;
+  if (args.option("--unwrap", &unwrap)) {
+    if (unwrap == "auto")
+      o.layout.unwrap = UnwrapMode::kAuto;
+    else if (unwrap == "always")
+      o.layout.unwrap = UnwrapMode::kAlways;
+    else if (unwrap == "never")
+      o.layout.unwrap = UnwrapMode::kNever;
+    else
+      throw ArgsError("--unwrap takes auto, always or never, not '" + unwrap + "'");
+  }
   std::string quality;
   if (args.option("--quality", &quality)) {
     try {
@@ -141,6 +154,8 @@ void measure_plan(const CookOptions& o, const PreparedScene& p, Progress& progre
 
 int verb_cook(Args& args) {
   const bool measure = args.flag("--measure-plan");
+  std::string gltf_path;
+  args.option("--write-gltf", &gltf_path);
   CookOptions o = parse_common(args, "OUT.lpk");
   o.scene_path = args.positional("SCENE");
   args.finish();
@@ -155,6 +170,7 @@ int verb_cook(Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  if (!gltf_path.empty()) probe_output_folder(gltf_path);
   Progress progress(o.quiet);
   Report report;
   const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report);
@@ -162,6 +178,10 @@ int verb_cook(Args& args) {
   const std::vector<uint8_t> pack = cook_pack(p, o.bake, progress, report, &maps);
   progress.begin("write", 1);
   write_file_atomic(o.output, pack.data(), pack.size());
+  if (!gltf_path.empty()) {
+    const std::vector<uint8_t> glb = gltf_with_lightmap_uvs(o.scene_path, p.scene, p.layout);
+    write_file_atomic(gltf_path, glb.data(), glb.size());
+  }
   report.stage_time("write", progress.end());
   const double cook_s = since(t0);
   progress.message("wrote " + o.output + " (" + std::to_string(pack.size()) + " bytes, " +
@@ -196,6 +216,9 @@ int verb_bake_state(Args& args) {
   const bool has_std_error = args.option("--std-error", &std_error_out);
   const float target_percent = args.float_option("--target-noise", 0.0f, 1e-3f, 100.0f);
   ref.target_noise = 0.01 * target_percent;
+  const PreviewOptions picture = parse_preview_options(args, "--png");
+  if (picture.view == PreviewView::kAtlases)
+    throw ArgsError("--view atlases shows a pack's atlases: use lightpatch preview");
   CookOptions o = parse_common(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
@@ -211,6 +234,7 @@ int verb_bake_state(Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
   const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
   probe_output_folder(o.output);
+  if (!picture.png.empty()) probe_output_folder(picture.png);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   if (reference) probe_output_folder(std_error_out);
   Progress progress(o.quiet);
@@ -233,6 +257,7 @@ int verb_bake_state(Args& args) {
   progress.begin("write", 1);
   write_pfm(o.output, map);
   if (reference) write_pfm(std_error_out, std_error);
+  if (!picture.png.empty()) write_preview(picture, map, layout_charts(p.scene, p.layout), nullptr);
   report.stage_time("write", progress.end());
   finish_report(o, report, since(t0));
   progress.message("wrote " + o.output + (reference ? " and " + std_error_out : std::string()) +
