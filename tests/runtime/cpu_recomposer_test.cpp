@@ -52,6 +52,7 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
     o.static_shadow_probability = 1.0f;
     o.width = 24;
     o.height = 20;
+    o.indirect_scale = seed == 1 ? 0 : 2 * (seed - 1);  // none, 1/2, 1/4 (a 6x5 indirect map)
     const testing::SyntheticPack bytes = make_synthetic_pack(o);
     PackView pack;
     Error error;
@@ -73,11 +74,18 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
       ASSERT_EQ(cpu.apply(state), Status::kOk);
       incremental |= !cpu.stats().rebuilt;
       if (i % 250 != 249) continue;
-      const std::vector<double> want = testing::presented(reference_map(pack, ref_of(state, pack)));
+      // Each presented map, and what a game samples: L + I magnified by the contract's formula.
+      const std::vector<double> maps = testing::presented(reference_map(pack, ref_of(state, pack)));
+      for (size_t t = 0; t < maps.size(); ++t) {
+        ASSERT_NEAR(cpu.presented_maps()[t], maps[t], 1e-4 * (1.0 + std::fabs(maps[t])))
+            << "map-set texel " << t / 3;
+      }
+      const std::vector<double> want = testing::sampled_reference(pack, maps);
       for (size_t t = 0; t < want.size(); ++t)
         ASSERT_NEAR(cpu.rgb()[t], want[t], 1e-4 * (1.0 + std::fabs(want[t]))) << "texel " << t / 3;
     }
     EXPECT_TRUE(incremental);
+    EXPECT_EQ(cpu.indirect_map() != nullptr, o.indirect_scale != 0);
   }
 }
 
