@@ -37,6 +37,9 @@ struct SyntheticOptions {
   // Edits the header and the patch records (not their count) before the table checksum is
   // computed: corrupt packs that only the record validation can refuse.
   std::function<void(pack::Header&, std::vector<pack::PatchRecord>&)> mutate;
+  // Atlas content by texel (x, y) and channel, the same in every atlas (default: random bytes):
+  // known values for closed-form expectations.
+  std::function<uint8_t(uint32_t x, uint32_t y, uint32_t channel)> atlas_byte;
 };
 
 // Pack bytes in 8-byte aligned storage.
@@ -150,7 +153,11 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   }
   for (auto& a : atlases) {
     a.resize(size_t(as) * as * 4);
-    for (uint8_t& b : a) b = uint8_t(integer(0, 255));
+    for (size_t i = 0; i < a.size(); ++i) {
+      a[i] = o.atlas_byte
+                 ? o.atlas_byte(uint32_t(i / 4 % as), uint32_t(i / 4 / as), uint32_t(i % 4))
+                 : uint8_t(integer(0, 255));
+    }
   }
 
   // Layout: header, index, then 256-aligned sections.
