@@ -97,9 +97,7 @@ std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, 
   BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, bake, progress, report);
   finalize_maps(maps, p, progress, report);
   std::vector<uint8_t> pack = timed(progress, report, "pack", [&] {
-    PackOptions po = pack_options(bake);
-    po.texels = &p.texels;
-    return build_pack(p.scene, p.layout, maps, po, report);
+    return build_pack(p.scene, p.layout, maps, pack_options(bake), report);
   });
   if (maps_out) *maps_out = std::move(maps);
   return pack;
