@@ -8,13 +8,37 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "lightpatch/pack_format.h"
 #include "lightpatch/status.h"
 
 namespace lightpatch {
 
-// A name inside the pack's string section; not NUL-terminated.
+// What a pack may ask of a recomposer beyond the format's own ranges (pack_format.h).
+// PackView::open refuses (Status::kOverLimit) a pack over them, so that `lightpatch verify` accepts
+// exactly what the recomposers can rebuild; a game on a device with more memory passes larger ones.
+struct RecomposeLimits {
+  // Light-map texels. The GLES runtime holds two RGBA16F maps (8 bytes a texel each: 256 MiB at
+  // the default), the CPU recomposer and the runtime's CPU fallback two float RGB maps (12 bytes a
+  // texel each: 384 MiB).
+  uint64_t max_lightmap_texels = uint64_t(4096) * 4096;
+  // The most one patch may add to a texel: its scale (a light at colour 1 and intensity 1), and
+  // its scale times its light's authored colour x intensity (1 for base and static-shadow
+  // patches). 65504 is the largest finite half float, the GLES runtime's target format.
+  float max_texel_value = 65504.0f;
+
+  // No limit beyond the format's own ranges (the cooker's check of what it wrote, tools that
+  // only read a pack's tables).
+  static RecomposeLimits format_only() {
+    RecomposeLimits l;
+    l.max_lightmap_texels = uint64_t(pack::kMaxLightmapSize) * pack::kMaxLightmapSize;
+    l.max_texel_value = std::numeric_limits<float>::infinity();
+    return l;
+  }
+};
+
+// A name inside the pack's string section; not NUL-terminated, valid UTF-8.
 struct Name {
   const char* data;
   uint32_t length;
@@ -27,8 +51,14 @@ class PackView {
 
   // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give) and on
   // success fills *out. On failure returns the error and fills *error (if non-null) with a
-  // message naming the problem; *out is left empty.
-  static Status open(const void* data, uint64_t size, PackView* out, Error* error);
+  // message naming the problem; *out is left empty. A valid pack over `limits` gives kOverLimit
+  // with a message naming the RecomposeLimits field.
+  static Status open(const void* data, uint64_t size, const RecomposeLimits& limits, PackView* out,
+                     Error* error);
+  // The same with the default RecomposeLimits.
+  static Status open(const void* data, uint64_t size, PackView* out, Error* error) {
+    return open(data, size, RecomposeLimits(), out, error);
+  }
 
   bool valid() const { return header_ != nullptr; }
   const pack::Header& header() const { return *header_; }
