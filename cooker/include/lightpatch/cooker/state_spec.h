@@ -24,5 +24,7 @@ StateSpec parse_state_json(const std::string& text, const std::string& what);  /
 StateSpec load_state_file(const std::string& path);                            // throws CookError
 // --states: one JSON state per non-empty line.
 std::vector<StateSpec> load_states_jsonl(const std::string& path);  // throws CookError
+// The same from text; `what` (the file's name) prefixes every error with the line number.
+std::vector<StateSpec> parse_states_jsonl(const std::string& text, const std::string& what);
 
 }  // namespace lightpatch::cooker
