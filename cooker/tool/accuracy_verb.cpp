@@ -34,6 +34,7 @@
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/scene_state.h"
+#include "limit_options.h"
 #include "plot_png.h"
 #include "verbs.h"
 
@@ -520,6 +521,7 @@ int verb_accuracy(Args& args) {
   o.threads = args.int_option("--threads", 0, 1, 1024);
   o.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.quiet = args.flag("--quiet", "-q");
+  const ImportLimits import_limits = parse_import_limits(args);
   o.scene_path = args.positional("SCENE");
   args.finish();
   if (o.csv_path.empty()) throw ArgsError("missing --csv OUT.csv");
@@ -531,6 +533,7 @@ int verb_accuracy(Args& args) {
   }
   if (o.gles && o.runtime_csv_path.empty()) throw ArgsError("--gles needs --runtime-csv");
   if (o.lightmap_size == 0) o.lightmap_size = o.quick ? kQuickLightmapSize : kDefaultLightmapSize;
+  check_command_files({o.scene_path}, {o.csv_path, o.plot_path, o.runtime_csv_path});
   probe_output_folder(o.csv_path);
   probe_output_folder(o.plot_path);
   if (!o.runtime_csv_path.empty()) probe_output_folder(o.runtime_csv_path);
@@ -541,7 +544,7 @@ int verb_accuracy(Args& args) {
   Report scratch;
 
   progress.begin("import", 1);
-  const Scene scene = import_gltf(o.scene_path);
+  const Scene scene = import_gltf(o.scene_path, import_limits);
   progress.end();
   progress.begin("trace setup", 1);
   const std::unique_ptr<Tracer> tracer = make_embree_tracer(scene);

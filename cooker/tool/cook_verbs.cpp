@@ -21,6 +21,7 @@
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
+#include "limit_options.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -35,6 +36,7 @@ struct CookOptions {
   std::string report_path;
   LayoutOptions layout;
   BakeOptions bake;
+  ImportLimits import;
   bool quiet = false;
 };
 
@@ -66,6 +68,7 @@ CookOptions parse_common(Args& args, const char* output_what) {
   o.bake.threads = args.int_option("--threads", 0, 1, 1024);
   o.bake.plan_effects = !args.flag("--no-plan");
   o.quiet = args.flag("--quiet", "-q");
+  o.import = parse_import_limits(args);
   return o;
 }
 
@@ -98,7 +101,7 @@ auto timed(Progress& progress, Report& report, const std::string& stage, F&& f) 
 
 Prepared prepare(const CookOptions& o, Progress& progress, Report& report) {
   Prepared p;
-  p.scene = timed(progress, report, "import", [&] { return import_gltf(o.scene_path); });
+  p.scene = timed(progress, report, "import", [&] { return import_gltf(o.scene_path, o.import); });
   p.layout = timed(progress, report, "layout", [&] { return build_layout(p.scene, o.layout); });
   for (const std::string& note : p.layout.notes) progress.message("note: " + note);
   p.tracer = timed(progress, report, "trace setup", [&] { return make_embree_tracer(p.scene); });
@@ -210,6 +213,7 @@ int verb_cook(Args& args) {
     throw ArgsError("--measure-plan compares the plan with --no-plan; give one of them");
   }
   const auto t0 = std::chrono::steady_clock::now();
+  check_command_files({o.scene_path}, {o.output, o.report_path});
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   Progress progress(o.quiet);
@@ -221,6 +225,8 @@ int verb_cook(Args& args) {
   po.keep_colour = !o.bake.plan_effects;
   const std::vector<uint8_t> pack = timed(
       progress, report, "pack", [&] { return build_pack(p.scene, p.layout, maps, po, report); });
+  if (const std::string w = default_limits_warning(pack); !w.empty())
+    std::fprintf(stderr, "lightpatch cook: warning: %s\n", w.c_str());
   progress.begin("write", 1);
   write_file_atomic(o.output, pack.data(), pack.size());
   report.stage_time("write", progress.end());
@@ -244,6 +250,7 @@ int verb_bake_state(Args& args) {
   o.scene_path = args.positional("SCENE");
   args.finish();
   const auto t0 = std::chrono::steady_clock::now();
+  check_command_files({o.scene_path, state_path}, {o.output, o.report_path});
   const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
