@@ -23,7 +23,9 @@
 #include <vector>
 
 #include "direct_light.h"
+#include "gather.h"
 #include "indirect_light.h"
+#include "indirect_solve.h"
 #include "lightpatch/cooker/error.h"
 #include "worker_pool.h"
 
@@ -39,6 +41,9 @@ constexpr const char* kForced = "forced on (--no-plan)";
 // Floor of output_step for a scene that is black at its authored state and has no semi-dynamic
 // light to expose for.
 constexpr float kMinOutputStep = 1e-6f;
+// Final gathering: bounce terms below this fraction of a group's significance threshold are
+// dropped (the Neumann series stops when a bounce adds less anywhere).
+constexpr float kBounceTolerance = 0.02f;
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -58,6 +63,18 @@ int preset_samples(Quality q) {
       return 64;
   }
   return 16;
+}
+
+GatherPreset preset_gather(Quality q) {
+  switch (q) {
+    case Quality::kDraft:
+      return {64, 4, 2};
+    case Quality::kPreview:
+      return {256, 2, 2};
+    case Quality::kProduction:
+      return {1024, 2, 1};
+  }
+  return {256, 2, 2};
 }
 
 IndirectPreset preset_indirect(Quality q) {
@@ -114,6 +131,9 @@ struct Baker {
   std::vector<LightPlan> plans;  // parallel to Scene::lights
   bool indirect = false;
   bool plan = true;  // BakeOptions::plan_effects; false: everything forced on
+  Integrator integrator = Integrator::kGather;
+  GatherPreset gp;
+  std::unique_ptr<GatherOperator> gather;  // built by bake_maps / bake_state when gathering
   IndirectPreset preset;
   IndirectSettings settings;
   std::vector<Emitter> static_emitters;
@@ -164,7 +184,33 @@ struct Baker {
     settings.photons = preset.photons;
     settings.virtual_lights = preset.virtual_lights;
     settings.area_bias = preset.area_bias;
-    if (indirect) plan_photons(s_max);
+    integrator = o.integrator;
+    gp = gather_preset(o);
+    if (photons()) plan_photons(s_max);
+  }
+
+  bool photons() const { return indirect && integrator == Integrator::kPhotons; }
+  bool gathering() const { return indirect && integrator == Integrator::kGather; }
+
+  // Traces the gather rays once for the whole bake.
+  void build_gather(const Layout& layout, Progress& progress, Report& report) {
+    if (!gathering()) return;
+    progress.begin("gather rays", 1);
+    GatherOptions go;
+    go.rays = gp.rays;
+    go.seed = seed;
+    go.threads = threads;
+    gather = std::make_unique<GatherOperator>(
+        cooker::build_gather(scene, layout, texels, tracer, gp.level, go));
+    report.stage_time("bake.gather_rays", progress.end());
+    std::lock_guard<std::mutex> lock(report.mutex());
+    nlohmann::json& g = report.root()["gather"];
+    g["level"] = gp.level;
+    g["rays_per_coarse_texel"] = gp.rays;
+    g["denoise_passes"] = gp.denoise;
+    g["coarse_texels"] = gather->grid.size();
+    g["rays"] = gather->rays_traced;
+    g["crossings"] = gather->crossings.size();
   }
 
   // Photon counts proportional to power (seed 004 §6.3.2): the static group's emitted flux at its
@@ -537,6 +583,13 @@ void fill_report_bake(Report& report, const Baker& b, Quality q, double seconds,
       total_s > 0.0 ? static_cast<double>(j["rays"].get<uint64_t>()) / total_s : 0.0;
   nlohmann::json& ind = report.root()["indirect"];
   ind["enabled"] = b.indirect;
+  ind["integrator"] = integrator_name(b.integrator);
+  if (b.integrator == Integrator::kGather) {
+    ind["rays_per_coarse_texel"] = b.gp.rays;
+    ind["level"] = b.gp.level;
+    ind["denoise_passes"] = b.gp.denoise;
+    return;
+  }
   ind["photons"] = b.preset.photons;
   ind["virtual_lights"] = b.preset.virtual_lights;
   ind["area_bias"] = b.preset.area_bias;
@@ -618,6 +671,121 @@ ObjectChanges object_changes(const Baker& b, const Scene& scene, int li, const I
   }
   progress.end();
   return out;
+}
+
+// One group's bounce light by final gathering, after its direct pass: the group's own indirect
+// light (objects absent) and, per candidate slot, what its objects change in it (coarse, not yet
+// denoised). `sources` gives each slot's fine direct change.
+struct GatherGroup {
+  bool enabled = false;
+  CoarseMap indirect;     // I with no object present
+  CoarseMap empty_total;  // source + albedo * I: the radiance the slots' changes start from
+  std::vector<CoarseMap> change;
+  // Objects that block none of the group's direct light but may change its bounce light: their
+  // change where it was worth solving (parallel to gather_group's `bounce_only`; empty if not).
+  std::vector<CoarseMap> bounce_change;
+  std::vector<std::string> bounce_reason;
+};
+
+// The tolerance shrinks with the scene's mean albedo: a series cut at a term t leaves a tail of
+// about t * albedo / (1 - albedo), which is what the decomposition and bake_state may differ by.
+SolveOptions solve_options(const GatherOperator& op, float threshold, int threads) {
+  SolveOptions so;
+  so.tolerance = kBounceTolerance * threshold * (1.0f - op.mean_albedo);
+  so.max_bounces = 1024;
+  so.threads = threads;
+  return so;
+}
+
+// A bounce-only object is solved when the first bounce of its change could reach this fraction of
+// half an output step; its change only shrinks with further bounces at albedos below one half,
+// and the solved change is kept or dropped by its own peak like every other map.
+constexpr float kBounceOnlyFraction = 0.5f;
+
+template <typename SlotSource>
+GatherGroup gather_group(const Baker& b, const std::string& group, float threshold,
+                         const FloatImage& direct, const Candidates& cand,
+                         const SlotSource& slot_source, const std::vector<int>& bounce_only,
+                         Progress& progress, Report& report) {
+  GatherGroup out;
+  const GatherOperator& op = *b.gather;
+  const auto t0 = std::chrono::steady_clock::now();
+  const CoarseMap source = coarse_source(op, b.texels, direct);
+  SolveStats st;
+  out.indirect = solve_indirect(op, {}, source, solve_options(op, threshold, b.threads), &st);
+  const float pk = peak(out.indirect);
+  out.enabled = !b.plan || pk >= 0.5f * threshold;
+  report.add_decision("indirect light: " + group, out.enabled,
+                      (b.plan ? "" : std::string(kForced) + ": ") + "bounce peak " +
+                          std::to_string(pk) + (pk >= 0.5f * threshold ? " above" : " below") +
+                          " half an output step (" + std::to_string(0.5f * threshold) + "); " +
+                          std::to_string(st.bounces) + " bounces",
+                      seconds_since(t0));
+  out.bounce_change.resize(bounce_only.size());
+  out.bounce_reason.assign(bounce_only.size(), "the group's bounce light is off");
+  if (!out.enabled) return out;
+  out.empty_total = total_radiance(op, source, out.indirect);
+  out.change.resize(cand.sets.size());
+  const size_t jobs = cand.sets.size() + bounce_only.size();
+  std::vector<double> seconds(jobs, 0.0);
+  progress.begin("bounce of objects: " + group, jobs);
+  parallel_for(int(jobs), b.threads, [&](int j) {
+    const auto tj = std::chrono::steady_clock::now();
+    std::vector<uint8_t> present(b.scene.objects.size(), 0);
+    if (size_t(j) < cand.sets.size()) {
+      for (int o : cand.sets[size_t(j)]) present[size_t(o)] = 1;
+      const CoarseMap dsrc = slot_source(size_t(j));
+      out.change[size_t(j)] =
+          solve_change(op, present, out.empty_total, dsrc, solve_options(op, threshold, 1));
+    } else {
+      const size_t k = size_t(j) - cand.sets.size();
+      present[size_t(bounce_only[k])] = 1;
+      const float first = first_change_peak(op, present, out.empty_total);
+      const float at = kBounceOnlyFraction * 0.5f * threshold;
+      if (b.plan && first < at) {
+        out.bounce_reason[k] = "first bounce of its change " + std::to_string(first) +
+                               " below a quarter output step (" + std::to_string(at) + ")";
+      } else {
+        out.bounce_reason[k] = (b.plan ? "" : std::string(kForced) + ": ") +
+                               "first bounce of its change " + std::to_string(first);
+        out.bounce_change[k] =
+            solve_change(op, present, out.empty_total, CoarseMap(op.grid.size(), glm::vec3(0.0f)),
+                         solve_options(op, threshold, 1));
+      }
+    }
+    seconds[size_t(j)] = seconds_since(tj);
+    progress.advance();
+  });
+  progress.end();
+  for (size_t j = 0; j < cand.sets.size(); ++j) {
+    std::string names;
+    for (int m : cand.sets[j])
+      names += (names.empty() ? "" : " + ") + b.scene.objects[size_t(m)].name;
+    if (cand.sets[j].size() == 1)
+      report.add_decision("indirect bounce: " + group + " / " + names, true,
+                          (b.plan ? "" : std::string(kForced) + ": ") +
+                              "blocks direct light: its change to the bounce light is solved",
+                          seconds[j]);
+  }
+  for (size_t k = 0; k < bounce_only.size(); ++k)
+    report.add_decision(
+        "indirect bounce: " + group + " / " + b.scene.objects[size_t(bounce_only[k])].name,
+        !out.bounce_change[k].empty(), out.bounce_reason[k], seconds[cand.sets.size() + k]);
+  return out;
+}
+
+// The first channel of a map whose three are equal (a light's grey transport).
+FloatImage first_channel(const FloatImage& m) {
+  if (m.channels == 1) return m;
+  FloatImage out(m.width, m.height, 1);
+  for (size_t i = 0; i < out.data.size(); ++i) out.data[i] = m.data[i * size_t(m.channels)];
+  return out;
+}
+
+// A coarse map denoised and magnified into `fine` (3 channels), scaled.
+void add_bounce(const Baker& b, CoarseMap map, FloatImage& fine, float scale = 1.0f) {
+  denoise(b.gather->grid, b.gp.denoise, map);
+  add_magnified(b.gather->grid, b.texels, map, fine, scale);
 }
 
 // A map whose rows are allocated when first written. A shadow usually darkens a corner of the
@@ -902,16 +1070,33 @@ Quality parse_quality(const std::string& name) {
   throw CookError("unknown quality '" + name + "' (expected draft, preview or production)");
 }
 
+const char* integrator_name(Integrator i) {
+  return i == Integrator::kPhotons ? "photons" : "gather";
+}
+
+Integrator parse_integrator(const std::string& name) {
+  if (name == "gather") return Integrator::kGather;
+  if (name == "photons") return Integrator::kPhotons;
+  throw CookError("unknown integrator '" + name + "' (expected gather or photons)");
+}
+
+GatherPreset gather_preset(const BakeOptions& options) {
+  GatherPreset p = preset_gather(options.quality);
+  if (options.gather_rays > 0) p.rays = options.gather_rays;
+  if (options.indirect_level > 0) p.level = options.indirect_level;
+  if (options.denoise >= 0) p.denoise = options.denoise;
+  return p;
+}
+
 BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& texels,
                     const Tracer& tracer, const BakeOptions& options, Progress& progress,
                     Report& report) {
-  (void)layout;
   check_inputs(scene, texels);
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t rays0 = tracer.rays_traced();
   progress.begin("plan", 1);
   Baker b(scene, texels, tracer, options);
-  const int h = texels.height;
+  const int w = texels.width, h = texels.height;
   BakedMaps maps;
   maps.output_step = b.output_step;
 
@@ -938,6 +1123,12 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
                                 std::to_string(b.area_samples) + " samples/texel");
   if (!b.indirect) {
     report.add_decision("indirect light", false, "turned off by the bake options");
+  } else if (b.gathering()) {
+    report.add_decision("indirect light", true,
+                        "final gathering: " + std::to_string(b.gp.rays) +
+                            " rays per coarse texel of " + std::to_string(b.gp.level) + " x " +
+                            std::to_string(b.gp.level) + " texels, " +
+                            std::to_string(b.gp.denoise) + " denoise passes");
   } else {
     report.add_decision("indirect light", true,
                         std::to_string(b.preset.photons) + " photons, " +
@@ -954,6 +1145,16 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     if (scene.lights[i].semi_dynamic) semi.push_back(static_cast<int>(i));
   }
   progress.end();
+  b.build_gather(layout, progress, report);
+  // Each candidate slot's fine direct change, as a coarse radiance source.
+  auto slot_source = [&](const auto& gm) {
+    return [&](size_t j) {
+      return coarse_source_of(*b.gather, texels, [&](size_t t) {
+        const SparseRows& r = gm.shadow[j];
+        return glm::vec3(r.at(t, 0), r.at(t, 1), r.at(t, 2));
+      });
+    };
+  };
 
   // Base map and static shadows: the static lights' pass.
   nlohmann::json pairs = nlohmann::json::array();
@@ -962,7 +1163,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     // Objects the static light can touch: some static light reaches them, emissive surfaces
     // (sampled everywhere) or the static group's bounce.
     Indirect ind;
-    if (b.indirect) {
+    if (b.photons()) {
       progress.begin("photons: static lights", 1);
       ind = b.make_indirect(-1, !scene.objects.empty());
       progress.end();
@@ -972,6 +1173,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       add_indirect_report(report, "static", ind);
     }
     Candidates cand(scene.objects.size());
+    std::vector<int> bounce_only;  // final gathering: may change the bounce light only
     for (size_t o = 0; o < scene.objects.size(); ++o) {
       bool reach = !b.plan || !b.emissive.empty() || (ind.enabled && !bounds[o].empty());
       for (size_t i = 0; i < scene.lights.size() && !reach; ++i) {
@@ -980,6 +1182,8 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       }
       if (reach) {
         cand.add(int(o));
+      } else if (b.gathering() && !bounds[o].empty()) {
+        bounce_only.push_back(int(o));
       } else {
         report.add_decision("static shadow of object " + scene.objects[o].name, false,
                             "no static light, emissive surface or static bounce reaches it");
@@ -989,16 +1193,47 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     progress.begin("base map", static_cast<uint64_t>(h));
     GroupMaps gm = trace_group(b, -1, ind, cand, changes, 3, progress);
     report.stage_time("bake.base", progress.end());
+    GatherGroup gg;
+    if (b.gathering()) {
+      gg = gather_group(b, "static lights", b.static_step, gm.map, cand, slot_source(gm),
+                        bounce_only, progress, report);
+      if (gg.enabled) add_bounce(b, gg.indirect, gm.map);
+      report.stage_time("bake.base_bounce", seconds_since(ts));
+    }
     report.stage_time("bake.base_with_photons", seconds_since(ts));
     maps.base = std::move(gm.map);
     for (size_t j = 0; j < cand.objects.size(); ++j) {
-      const float peak = gm.shadow[j].peak(texels);
+      FloatImage change = gm.shadow[j].dense();
+      if (gg.enabled) add_bounce(b, std::move(gg.change[j]), change);
+      const float peak = peak_of(change, texels);
       const float keep_at = kPairKeepFraction * b.static_step;
       const bool keep = !b.plan || peak > keep_at;
       report.add_decision("static shadow of object " + scene.objects[size_t(cand.objects[j])].name,
                           keep, b.plan ? keep_reason(peak, keep_at, "change") : kForced);
-      if (keep) maps.static_shadows.push_back({cand.objects[j], gm.shadow[j].dense()});
+      if (keep) maps.static_shadows.push_back({cand.objects[j], std::move(change)});
     }
+    for (size_t k = 0; k < bounce_only.size(); ++k) {
+      const std::string what =
+          "static shadow of object " + scene.objects[size_t(bounce_only[k])].name;
+      if (gg.bounce_change.empty() || gg.bounce_change[k].empty()) {
+        report.add_decision(
+            what, false,
+            "no static light or emissive surface reaches it; " +
+                (gg.bounce_reason.empty() ? std::string("no bounce light") : gg.bounce_reason[k]));
+        continue;
+      }
+      FloatImage change(w, h, 3);
+      add_bounce(b, std::move(gg.bounce_change[k]), change);
+      const float peak = peak_of(change, texels);
+      const float keep_at = kPairKeepFraction * b.static_step;
+      const bool keep = !b.plan || peak > keep_at;
+      report.add_decision(what, keep,
+                          b.plan ? keep_reason(peak, keep_at, "bounce change") : kForced);
+      if (keep) maps.static_shadows.push_back({bounce_only[k], std::move(change)});
+    }
+    std::sort(
+        maps.static_shadows.begin(), maps.static_shadows.end(),
+        [](const StaticShadowMap& a, const StaticShadowMap& c) { return a.object < c.object; });
     // The pack has no static pair corrections: overlapping static shadows stay the paper's
     // approximation, reported with their size.
     for (auto& [key, img] : gm.pairs) {
@@ -1023,7 +1258,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     const LightPlan& plan = b.plans[static_cast<size_t>(li)];
     const auto ts = std::chrono::steady_clock::now();
     Indirect ind;
-    if (b.indirect) {
+    if (b.photons()) {
       progress.begin("photons: " + light_name(scene, li), 1);
       ind = b.make_indirect(li, true);
       progress.end();
@@ -1033,10 +1268,15 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     // Every object is a candidate while the light has indirect light (an object anywhere in the
     // room blocks some of its bounce); otherwise only those the direct light can reach.
     Candidates cand(scene.objects.size());
+    std::vector<int> bounce_only;  // final gathering: may change the bounce light only
+    std::vector<std::string> bounce_why;
     for (size_t o = 0; o < scene.objects.size(); ++o) {
       const std::string why = precull_pair(light, plan, bounds[o]);
       if (!b.plan || why.empty() || (ind.enabled && !bounds[o].empty())) {
         cand.add(int(o));
+      } else if (b.gathering() && !bounds[o].empty()) {
+        bounce_only.push_back(int(o));
+        bounce_why.push_back(why);
       } else {
         pairs.push_back({{"light", light.name},
                          {"object", scene.objects[o].name},
@@ -1046,19 +1286,32 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       }
     }
     const ObjectChanges changes = object_changes(b, scene, li, ind, cand, progress, report);
-    const int channels = ind.enabled ? 3 : 1;
+    const int channels = ind.enabled || b.gathering() ? 3 : 1;
     progress.begin("light " + light_name(scene, li), static_cast<uint64_t>(h));
     GroupMaps gm = trace_group(b, li, ind, cand, changes, channels, progress);
     report.stage_time("bake.contribution", progress.end());
+    GatherGroup gg;
+    if (b.gathering()) {
+      gg = gather_group(b, light_name(scene, li), plan.threshold, gm.map, cand, slot_source(gm),
+                        bounce_only, progress, report);
+      if (gg.enabled) add_bounce(b, gg.indirect, gm.map);
+      report.stage_time("bake.contribution_bounce", seconds_since(ts));
+    }
     report.stage_time("bake.contribution_with_photons", seconds_since(ts));
+    // Without bounce light the light's transport is grey: one channel.
+    const bool grey = b.gathering() && !gg.enabled;
     maps.lights.push_back(li);
-    maps.contribution.push_back(std::move(gm.map));
+    maps.contribution.push_back(grey ? first_channel(gm.map) : std::move(gm.map));
     const float keep_at = kPairKeepFraction * plan.threshold;
     std::vector<uint8_t> shadow_kept(cand.objects.size(), 0);
     std::vector<const FloatImage*> shadow_map_of(scene.objects.size(), nullptr);
     const size_t first_shadow = maps.shadows.size();
+    std::vector<FloatImage> dense(cand.objects.size());
     for (size_t j = 0; j < cand.objects.size(); ++j) {
-      const float peak = gm.shadow[j].peak(texels);
+      dense[j] = gm.shadow[j].dense();
+      if (gg.enabled) add_bounce(b, gg.change[j], dense[j]);
+      if (grey) dense[j] = first_channel(dense[j]);
+      const float peak = peak_of(dense[j], texels);
       const Object& obj = scene.objects[static_cast<size_t>(cand.objects[j])];
       const bool keep = !b.plan || peak > keep_at;
       shadow_kept[j] = keep ? 1 : 0;
@@ -1072,7 +1325,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
         ShadowMap sm;
         sm.light = static_cast<int>(k);
         sm.object = cand.objects[j];
-        sm.map = gm.shadow[j].dense();
+        sm.map = std::move(dense[j]);
         maps.shadows.push_back(std::move(sm));
       }
     }
@@ -1084,6 +1337,7 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
     // sum of its parts (one object hides the other's bounce), so with indirect light the kept
     // pairs get a joint pass and P_ab = S_a + S_b - S_ab.
     std::vector<PairCorrectionMap> kept_pairs;
+    std::vector<std::pair<int, int>> kept_slots;
     for (auto& [key, img] : gm.pairs) {
       const int oa = cand.objects[size_t(key.first)], ob = cand.objects[size_t(key.second)];
       const float peak = peak_of(img, texels);
@@ -1098,8 +1352,35 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       pc.light = static_cast<int>(k);
       pc.object_a = std::min(oa, ob);
       pc.object_b = std::max(oa, ob);
-      pc.map = std::move(img);
+      pc.map = grey ? first_channel(img) : std::move(img);
       kept_pairs.push_back(std::move(pc));
+      kept_slots.push_back(key);
+    }
+    // Final gathering: the pair's joint change to the bounce light from the same rays, P_ab's
+    // bounce part = change_a + change_b - change_ab (direct overlap measured above).
+    if (gg.enabled && !kept_pairs.empty()) {
+      progress.begin("overlaps " + light_name(scene, li), kept_pairs.size());
+      parallel_for(int(kept_pairs.size()), b.threads, [&](int i) {
+        PairCorrectionMap& pc = kept_pairs[size_t(i)];
+        const auto [ja, jb] = kept_slots[size_t(i)];
+        const SparseRows &ra = gm.shadow[size_t(ja)], &rb = gm.shadow[size_t(jb)];
+        const CoarseMap joint_direct = coarse_source_of(*b.gather, texels, [&](size_t t) {
+          const int x = int(t % size_t(w)), y = int(t / size_t(w));
+          glm::vec3 v;
+          for (int c = 0; c < 3; ++c) v[c] = ra.at(t, c) + rb.at(t, c) - pc.map.at(x, y, c);
+          return v;
+        });
+        std::vector<uint8_t> present(scene.objects.size(), 0);
+        present[size_t(pc.object_a)] = present[size_t(pc.object_b)] = 1;
+        const CoarseMap joint = solve_change(*b.gather, present, gg.empty_total, joint_direct,
+                                             solve_options(*b.gather, plan.threshold, 1));
+        CoarseMap p(joint.size());
+        for (size_t c = 0; c < p.size(); ++c)
+          p[c] = gg.change[size_t(ja)][c] + gg.change[size_t(jb)][c] - joint[c];
+        add_bounce(b, std::move(p), pc.map);
+        progress.advance();
+      });
+      report.stage_time("bake.overlaps", progress.end());
     }
     if (ind.enabled && !kept_pairs.empty()) {
       Candidates joint(scene.objects.size());
@@ -1119,6 +1400,33 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
       }
     }
     for (PairCorrectionMap& pc : kept_pairs) maps.pair_corrections.push_back(std::move(pc));
+    // Objects that block none of the light's direct light, by their change to its bounce light.
+    for (size_t q = 0; q < bounce_only.size(); ++q) {
+      const Object& obj = scene.objects[size_t(bounce_only[q])];
+      if (gg.bounce_change.empty() || gg.bounce_change[q].empty()) {
+        pairs.push_back({{"light", light.name},
+                         {"object", obj.name},
+                         {"kept", false},
+                         {"stage", "geometric"},
+                         {"reason", bounce_why[q] + "; bounce: " +
+                                        (gg.bounce_reason.empty() ? std::string("none")
+                                                                  : gg.bounce_reason[q])}});
+        continue;
+      }
+      FloatImage change(w, h, 3);
+      add_bounce(b, std::move(gg.bounce_change[q]), change);
+      const float peak = peak_of(change, texels);
+      const bool keep = !b.plan || peak > keep_at;
+      pairs.push_back({{"light", light.name},
+                       {"object", obj.name},
+                       {"kept", keep},
+                       {"stage", "bounce"},
+                       {"peak", peak},
+                       {"reason", b.plan ? keep_reason(peak, keep_at, "bounce change") : kForced}});
+      if (keep) maps.shadows.push_back({static_cast<int>(k), bounce_only[q], std::move(change)});
+    }
+    std::sort(maps.shadows.begin() + long(first_shadow), maps.shadows.end(),
+              [](const ShadowMap& a, const ShadowMap& c) { return a.object < c.object; });
     report_triples(report, light_name(scene, li), gm);
     group_time(report, light_name(scene, li), seconds_since(ts));
   }
@@ -1146,7 +1454,6 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
 FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& texels,
                       const Tracer& tracer, const StateSpec& state, const BakeOptions& options,
                       Progress& progress, Report& report) {
-  (void)layout;
   check_inputs(scene, texels);
   // Resolve the state by name.
   std::vector<glm::vec3> radiant(scene.lights.size());  // colour * intensity, 0 when off
@@ -1204,7 +1511,7 @@ FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& 
     PhotonGroup::Change change;
   };
   std::vector<StateGroup> groups;
-  if (b.indirect) {
+  if (b.photons()) {
     progress.begin("photons", 1);
     auto add_group = [&](int li, const glm::vec3& scale) {
       StateGroup g;
@@ -1294,6 +1601,24 @@ FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& 
     progress.advance();
   });
   report.stage_time("bake.state", progress.end());
+  if (b.gathering()) {
+    // The state's bounce light in one solve: every group's direct light at its state's colour is
+    // one source, the visible objects are present. The tolerance is the finest of the groups'
+    // (each group's significance at its state's brightness), so the state is solved at least as
+    // finely as the decomposition's maps.
+    b.build_gather(layout, progress, report);
+    progress.begin("bounce light", 1);
+    float tolerance = b.static_step;
+    for (size_t li = 0; li < scene.lights.size(); ++li) {
+      if (scene.lights[li].semi_dynamic && max3(radiant[li]) > 0.0f)
+        tolerance = std::min(tolerance, b.plans[li].threshold * max3(radiant[li]));
+    }
+    const CoarseMap source = coarse_source(*b.gather, texels, out);
+    const CoarseMap bounce =
+        solve_indirect(*b.gather, visible, source, solve_options(*b.gather, tolerance, b.threads));
+    add_bounce(b, bounce, out);
+    report.stage_time("bake.state_bounce", progress.end());
+  }
   fill_report_bake(report, b, options.quality, seconds_since(t0), rays0);
   return out;
 }

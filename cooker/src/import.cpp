@@ -691,6 +691,12 @@ bool extras_flag(const tinygltf::Value& extras, const char* key) {
   return false;
 }
 
+// A flag whose absence means `absent` (castShadows: only an explicit false turns it off).
+bool extras_flag_or(const tinygltf::Value& extras, const char* key, bool absent) {
+  if (!extras.IsObject() || !extras.Has(key)) return absent;
+  return extras_flag(extras, key);
+}
+
 int Importer::texture_for(int gltf_texture) {
   if (gltf_texture < 0 || size_t(gltf_texture) >= model_.textures.size())
     throw CookError(err("material refers to missing texture " + std::to_string(gltf_texture)));
@@ -879,6 +885,7 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
     mi.name = n.name;
     mi.node_index = node;
     mi.primitive_index = int(p);
+    mi.cast_shadows = extras_flag_or(n.extras, "castShadows", true);
     mi.object = object;
     if (prim.material >= 0) {
       if (size_t(prim.material) >= model_.materials.size())

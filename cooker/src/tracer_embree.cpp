@@ -46,6 +46,62 @@ const char* error_name(RTCError code) {
 
 class EmbreeTracer;
 
+// Embree's packet types and calls by width, so one template serves 4, 8 and 16.
+template <int W>
+struct Packet;
+template <>
+struct Packet<4> {
+  using RayHit = RTCRayHit4;
+  using Ray = RTCRay4;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+    rtcIntersect4(v, s, c, r);
+  }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
+    rtcOccluded4(v, s, c, r);
+  }
+};
+template <>
+struct Packet<8> {
+  using RayHit = RTCRayHit8;
+  using Ray = RTCRay8;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+    rtcIntersect8(v, s, c, r);
+  }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
+    rtcOccluded8(v, s, c, r);
+  }
+};
+template <>
+struct Packet<16> {
+  using RayHit = RTCRayHit16;
+  using Ray = RTCRay16;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+    rtcIntersect16(v, s, c, r);
+  }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
+    rtcOccluded16(v, s, c, r);
+  }
+};
+
+// Fills lane i of a packet ray from `r`; false (lane left invalid) for an empty segment.
+template <typename R>
+bool set_lane(R& ray, int i, const Ray& r, unsigned mask) {
+  if (!(r.tmax > r.tmin)) return false;
+  ray.org_x[i] = r.origin.x;
+  ray.org_y[i] = r.origin.y;
+  ray.org_z[i] = r.origin.z;
+  ray.dir_x[i] = r.dir.x;
+  ray.dir_y[i] = r.dir.y;
+  ray.dir_z[i] = r.dir.z;
+  ray.tnear[i] = std::max(0.0f, r.tmin);
+  ray.tfar[i] = r.tmax;
+  ray.time[i] = 0.0f;
+  ray.mask[i] = mask;
+  ray.id[i] = static_cast<unsigned>(i);
+  ray.flags[i] = 0;
+  return true;
+}
+
 // The intersect context a query passes to Embree; the context filter (used only where the
 // Embree build lacks ray masks) reads the rest.
 struct QueryContext {
@@ -69,6 +125,13 @@ class EmbreeTracer final : public Tracer {
     }
     rtcSetDeviceErrorFunction(device_, &EmbreeTracer::on_error, this);
     masks_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+    // Batch queries use the widest packet the CPU and the Embree build run natively (a wider one
+    // would be emulated with narrower ones).
+    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0) {
+      packet_width_ = 16;
+    } else if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0) {
+      packet_width_ = 8;
+    }
     if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) == 0) {
       rtcReleaseDevice(device_);
       throw CookError("Embree was built without filter functions, which the cooker needs");
@@ -148,6 +211,21 @@ class EmbreeTracer final : public Tracer {
     }
     return collect(origin, dir, tmin, tmax, kStaticMask | kObjectMask, out, max_out);
   }
+
+  void intersect_many(const Ray* rays, int n, Hit* hits, bool with_objects) const override {
+    const unsigned accept = with_objects ? (kStaticMask | kObjectMask) : kStaticMask;
+    if (packet_width_ == 16) return intersect_packets<16>(rays, n, hits, accept);
+    if (packet_width_ == 8) return intersect_packets<8>(rays, n, hits, accept);
+    intersect_packets<4>(rays, n, hits, accept);
+  }
+
+  void occluded_static_many(const Ray* rays, int n, uint8_t* blocked) const override {
+    if (packet_width_ == 16) return occluded_packets<16>(rays, n, blocked);
+    if (packet_width_ == 8) return occluded_packets<8>(rays, n, blocked);
+    occluded_packets<4>(rays, n, blocked);
+  }
+
+  int batch_width() const override { return packet_width_; }
 
   uint64_t rays_traced() const override {
     uint64_t sum = 0;
@@ -237,7 +315,8 @@ class EmbreeTracer final : public Tracer {
       }
       mesh_object_[m] = mesh.object;
       const size_t tris = mesh.indices.size() / 3;
-      if (tris == 0 || mesh.positions.empty()) continue;
+      // A mesh that casts no shadows (a light's own flame or bulb) is not an occluder at all.
+      if (tris == 0 || mesh.positions.empty() || !mesh.cast_shadows) continue;
       RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
       check("new geometry");
       auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
@@ -320,6 +399,66 @@ class EmbreeTracer final : public Tracer {
       }
       object_lo_[o] -= glm::vec3(epsilon_);
       object_hi_[o] += glm::vec3(epsilon_);
+    }
+  }
+
+  // Packets of W lanes over the batch; the last one partly valid. Lanes of empty segments stay
+  // invalid and answer "no hit".
+  template <int W>
+  void intersect_packets(const Ray* rays, int n, Hit* hits, unsigned accept) const {
+    QueryContext qc;
+    init_context(qc, accept);
+    for (int first = 0; first < n; first += W) {
+      const int m = std::min(W, n - first);
+      alignas(64) int valid[W];
+      alignas(64) typename Packet<W>::RayHit rh;
+      int live = 0;
+      for (int i = 0; i < W; ++i) {
+        valid[i] = (i < m && set_lane(rh.ray, i, rays[first + i], accept)) ? -1 : 0;
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        live += valid[i] != 0 ? 1 : 0;
+      }
+      if (live > 0) {
+        count_rays(static_cast<uint64_t>(live));
+        Packet<W>::intersect(valid, scene_, &qc.ctx, &rh);
+      }
+      for (int i = 0; i < m; ++i) {
+        Hit& h = hits[first + i];
+        h = Hit{};
+        if (valid[i] == 0 || rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
+        h.hit = true;
+        h.t = rh.ray.tfar[i];
+        h.mesh = static_cast<int>(rh.hit.geomID[i]);
+        h.triangle = static_cast<int>(rh.hit.primID[i]);
+        h.u = rh.hit.u[i];
+        h.v = rh.hit.v[i];
+        h.geometric_normal = triangle_normal(h.mesh, h.triangle);
+      }
+    }
+  }
+
+  template <int W>
+  void occluded_packets(const Ray* rays, int n, uint8_t* blocked) const {
+    QueryContext qc;
+    init_context(qc, kStaticMask);
+    for (int first = 0; first < n; first += W) {
+      const int m = std::min(W, n - first);
+      alignas(64) int valid[W];
+      alignas(64) typename Packet<W>::Ray ray;
+      int live = 0;
+      for (int i = 0; i < W; ++i) {
+        valid[i] = (i < m && set_lane(ray, i, rays[first + i], kStaticMask)) ? -1 : 0;
+        live += valid[i] != 0 ? 1 : 0;
+      }
+      if (live > 0) {
+        count_rays(static_cast<uint64_t>(live));
+        Packet<W>::occluded(valid, scene_, &qc.ctx, &ray);
+      }
+      for (int i = 0; i < m; ++i) {
+        blocked[first + i] = (valid[i] != 0 && ray.tfar[i] < 0.0f) ? 1 : 0;  // -inf on a hit
+      }
     }
   }
 
@@ -414,10 +553,11 @@ class EmbreeTracer final : public Tracer {
     return len > 0.0f ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
   }
 
-  void count_ray() const {
+  void count_ray() const { count_rays(1); }
+  void count_rays(uint64_t k) const {
     static std::atomic<unsigned> next_slot{0};
     thread_local const unsigned slot = next_slot.fetch_add(1) % kCounters;
-    counters_[slot].value.fetch_add(1, std::memory_order_relaxed);
+    counters_[slot].value.fetch_add(k, std::memory_order_relaxed);
   }
 
   static constexpr unsigned kCounters = 16;
@@ -427,6 +567,7 @@ class EmbreeTracer final : public Tracer {
   std::vector<glm::vec3> object_lo_, object_hi_;
   bool masks_ = true;
   bool has_objects_ = false;
+  int packet_width_ = 4;  // batch queries' packet width: 16, 8 or 4
   float epsilon_ = 1e-5f;
   std::vector<int> mesh_object_;        // geometry id (= mesh index) -> object or -1
   std::vector<const float*> vertices_;  // Embree-owned buffers, alive with the scene

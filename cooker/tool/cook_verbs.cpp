@@ -61,6 +61,19 @@ CookOptions parse_common(Args& args, const char* output_what) {
   args.option("--report", &o.report_path);
   // Indirect light and sampling: overrides of the quality preset (0 keeps the preset's value).
   o.bake.indirect = !args.flag("--no-indirect");
+  std::string integrator;
+  if (args.option("--integrator", &integrator)) {
+    try {
+      o.bake.integrator = parse_integrator(integrator);
+    } catch (const CookError& e) {
+      throw ArgsError(e.what());
+    }
+  }
+  o.bake.gather_rays = args.int_option("--gather-rays", 0, 1, 65536);
+  o.bake.indirect_level = args.int_option("--indirect-level", 0, 1, 8);
+  if (o.bake.indirect_level != 0 && (o.bake.indirect_level & (o.bake.indirect_level - 1)) != 0)
+    throw ArgsError("--indirect-level must be 1, 2, 4 or 8");
+  o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
   o.bake.photons = args.int_option("--photons", 0, 1, 100'000'000);
   o.bake.virtual_lights = args.int_option("--virtual-lights", 0, 1, 1'000'000);
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);

@@ -154,6 +154,7 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
   const ToolRun cook = expect_success({"cook", "--help"});
   for (const char* option : {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect",
                              "--photons", "--virtual-lights", "--area-samples", "--seed",
+                             "--integrator", "--gather-rays", "--indirect-level", "--denoise",
                              "--threads", "--report", "--quiet", "--no-plan", "--measure-plan"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
@@ -168,20 +169,35 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
                      kFast));
   EXPECT_EQ(nlohmann::json::parse(read_bytes(dir.file("direct.json")))["indirect"]["enabled"],
             false);
-  expect_success(cat({"cook", scene, "-o", dir.file("a.lpk"), "--photons", "5000", "--seed", "7",
-                      "--threads", "1", "--report", dir.file("a.json")},
-                     kFast));
+  expect_success(
+      cat({"cook", scene, "-o", dir.file("a.lpk"), "--gather-rays", "48", "--indirect-level", "2",
+           "--denoise", "1", "--seed", "7", "--threads", "1", "--report", dir.file("a.json")},
+          kFast));
   const nlohmann::json a = nlohmann::json::parse(read_bytes(dir.file("a.json")));
   EXPECT_EQ(a["indirect"]["enabled"], true);
-  EXPECT_EQ(a["indirect"]["photons"], 5000);
+  EXPECT_EQ(a["indirect"]["integrator"], "gather");
+  EXPECT_EQ(a["indirect"]["rays_per_coarse_texel"], 48);
+  EXPECT_EQ(a["indirect"]["level"], 2);
+  EXPECT_EQ(a["indirect"]["denoise_passes"], 1);
   // One thread or all cores: the same pack.
-  expect_success(
-      cat({"cook", scene, "-o", dir.file("b.lpk"), "--photons", "5000", "--seed", "7"}, kFast));
+  expect_success(cat({"cook", scene, "-o", dir.file("b.lpk"), "--gather-rays", "48",
+                      "--indirect-level", "2", "--denoise", "1", "--seed", "7"},
+                     kFast));
   EXPECT_TRUE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("b.lpk")));
-  // Another seed: other photons, another pack.
-  expect_success(
-      cat({"cook", scene, "-o", dir.file("c.lpk"), "--photons", "5000", "--seed", "8"}, kFast));
+  // Another seed: other rays, another pack.
+  expect_success(cat({"cook", scene, "-o", dir.file("c.lpk"), "--gather-rays", "48",
+                      "--indirect-level", "2", "--denoise", "1", "--seed", "8"},
+                     kFast));
   EXPECT_FALSE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("c.lpk")));
+  // The photon integrator keeps its knobs.
+  expect_success(cat({"cook", scene, "-o", dir.file("p.lpk"), "--integrator", "photons",
+                      "--photons", "5000", "--report", dir.file("p.json")},
+                     kFast));
+  EXPECT_EQ(nlohmann::json::parse(read_bytes(dir.file("p.json")))["indirect"]["photons"], 5000);
+  expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--indirect-level", "3"}, kFast),
+                 "--indirect-level", "");
+  expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--integrator", "vpl"}, kFast),
+                 "integrator", "");
   const std::string out = dir.file("out.lpk");
   write_precious(out);
   expect_failure(dir, {"cook", scene, "-o", out, "--photons", "0"}, "--photons", out);

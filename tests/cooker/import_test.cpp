@@ -305,10 +305,15 @@ TEST(ImportGltf, ExtrasAcceptBlenderStyleNumbersAndIgnoreFalse) {
     if (n["name"] == "crate") n["extras"] = {{"semiDynamic", false}};  // explicitly static
     if (n["name"] == "spot") n["extras"] = {{"semiDynamic", true}, {"lightRadius", 0.1}};
   }
+  for (auto& n : nodes) {
+    if (n["name"] == "floor") n["extras"] = {{"castShadows", 0}};  // Blender's false
+  }
   const Scene s = cooker::import_gltf(write_glb(dir, "extras", parts));
   ASSERT_EQ(s.objects.size(), 1u);
   EXPECT_EQ(s.objects[0].name, "pillar");
   EXPECT_EQ(mesh_named(s, "crate").object, -1);
+  EXPECT_FALSE(mesh_named(s, "floor").cast_shadows);
+  EXPECT_TRUE(mesh_named(s, "crate").cast_shadows);  // absent: casts shadows
   EXPECT_TRUE(light_named(s, "spot").semi_dynamic);
   EXPECT_FLOAT_EQ(light_named(s, "spot").radius, 0.1f);
 }

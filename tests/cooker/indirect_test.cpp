@@ -54,7 +54,8 @@ struct FurnaceResult {
 FurnaceResult furnace(float rho, const BakeOptions& o, int n, bool semi = false) {
   Scene s = test::furnace_box(rho);
   s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f, semi)};
-  const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
+  TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
+  texels.albedo.assign(texels.albedo.size(), glm::vec3(rho));  // gathering reads texel albedo
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
   Report report;
@@ -72,11 +73,28 @@ FurnaceResult furnace(float rho, const BakeOptions& o, int n, bool semi = false)
   return r;
 }
 
-// Without the area bias the virtual lights' form factors conserve energy: what is left is photon
-// noise and the texel grid.
-TEST(Indirect, FurnaceConservesEnergyWithoutBias) {
+// Final gathering conserves energy in the furnace: what is left is the gather noise, the texel
+// grid and the bounces the tolerance drops.
+TEST(Indirect, FurnaceConservesEnergy) {
   BakeOptions o;
   o.quality = Quality::kDraft;
+  o.indirect_level = 2;
+  for (bool semi : {false, true}) {
+    const FurnaceResult r = furnace(0.5f, o, 12, semi);
+    const double expected = 4.0 * kPi / (1.0 - 0.5);
+    std::printf("furnace rho 0.5 (gather), %s: %.4f vs %.4f (%+.2f%%)\n", semi ? "C_l" : "B",
+                r.flux, expected, 100.0 * (r.flux / expected - 1.0));
+    EXPECT_TRUE(r.finite);
+    EXPECT_NEAR(r.flux / expected, 1.0, 0.01);
+  }
+}
+
+// Without the area bias the virtual lights' form factors conserve energy: what is left is photon
+// noise and the texel grid.
+TEST(Indirect, PhotonFurnaceConservesEnergyWithoutBias) {
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  o.integrator = Integrator::kPhotons;
   o.area_bias = 0.0f;
   o.photons = 20000;
   o.virtual_lights = 128;
@@ -91,16 +109,57 @@ TEST(Indirect, FurnaceConservesEnergyWithoutBias) {
 }
 
 TEST(Indirect, AlbedoNearOneStaysFinite) {
+  for (Integrator integrator : {Integrator::kGather, Integrator::kPhotons}) {
+    BakeOptions o;
+    o.quality = Quality::kDraft;
+    o.integrator = integrator;
+    o.photons = 1500;
+    o.virtual_lights = 32;
+    const FurnaceResult r = furnace(0.99f, o, 6);
+    EXPECT_TRUE(r.finite);
+    const double expected = 4.0 * kPi / (1.0 - 0.99);
+    std::printf("furnace rho 0.99 (draft, %s): %.2f vs %.2f\n", integrator_name(integrator), r.flux,
+                expected);
+    EXPECT_GT(r.flux, 0.5 * expected);
+    EXPECT_LT(r.flux, 1.2 * expected);
+  }
+}
+
+// A candle inside its closed flame mesh (albedo 1, extras castShadows: false) lights and bounces
+// exactly like the same candle without the mesh; the same mesh casting shadows swallows it.
+TEST(Indirect, LightInsideItsOwnFlameMeshIsNotSwallowed) {
   BakeOptions o;
   o.quality = Quality::kDraft;
-  o.photons = 1500;
-  o.virtual_lights = 32;
-  const FurnaceResult r = furnace(0.99f, o, 6);
-  EXPECT_TRUE(r.finite);
-  const double expected = 4.0 * kPi / (1.0 - 0.99);
-  std::printf("furnace rho 0.99 (draft): %.2f vs %.2f\n", r.flux, expected);
-  EXPECT_GT(r.flux, 0.5 * expected);
-  EXPECT_LT(r.flux, 1.2 * expected);
+  o.photons = 4000;
+  o.virtual_lights = 48;
+  const glm::vec3 lamp{0.13f, 0.21f, -0.17f};
+  auto bake = [&](int flame) {  // 0: no flame mesh, 1: flame casting no shadows, 2: casting
+    Scene s = test::furnace_box(0.5f);
+    s.materials.push_back({"flame", glm::vec3(1.0f), -1, glm::vec3(0.0f)});
+    if (flame > 0) {
+      const int m = test::add_box(s, lamp - glm::vec3(0.02f), lamp + glm::vec3(0.02f), "flame", -1,
+                                  int(s.materials.size()) - 1);
+      s.meshes[size_t(m)].cast_shadows = flame == 2;
+    }
+    test::finish(s);
+    s.lights = {test::point_light("candle", lamp, 1.0f)};
+    const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, 8);
+    auto tracer = make_embree_tracer(s);
+    Progress progress(true);
+    Report report;
+    return bake_maps(s, test::bare_layout(texels.width, texels.height), texels, *tracer, o,
+                     progress, report)
+        .base;
+  };
+  const FloatImage bare = bake(0), flame = bake(1), shut = bake(2);
+  double sum_bare = 0.0, sum_shut = 0.0;
+  for (size_t i = 0; i < bare.data.size(); ++i) {
+    EXPECT_FLOAT_EQ(flame.data[i], bare.data[i]) << "texel component " << i;
+    sum_bare += bare.data[i];
+    sum_shut += shut.data[i];
+  }
+  EXPECT_GT(sum_bare, 0.0);
+  EXPECT_LT(sum_shut, 0.01 * sum_bare);  // a flame that casts shadows would swallow the candle
 }
 
 bool has_decision(Report& report, const std::string& what, bool taken,
@@ -124,15 +183,19 @@ TEST(Indirect, LostPhotonsAreReportedNotLoopedOn) {
   const TexelSet texels = test::grid_texels(8, 8, {-4, 0, -4}, {8, 0, 0}, {0, 0, 8}, {0, 1, 0});
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
-  Report report;
-  BakeOptions o;
-  o.quality = Quality::kDraft;
-  const BakedMaps maps =
-      bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
-  EXPECT_TRUE(has_decision(report, "indirect light: static lights", false, "left the scene"));
-  EXPECT_TRUE(has_decision(report, "indirect light: up", false, "left the scene"));
-  ASSERT_EQ(maps.contribution.size(), 1u);
-  EXPECT_EQ(maps.contribution[0].channels, 1);  // no bounce: one channel
+  for (Integrator integrator : {Integrator::kGather, Integrator::kPhotons}) {
+    BakeOptions o;
+    o.quality = Quality::kDraft;
+    o.integrator = integrator;
+    Report report;
+    const BakedMaps maps =
+        bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
+    const char* why = integrator == Integrator::kPhotons ? "left the scene" : "bounce peak 0";
+    EXPECT_TRUE(has_decision(report, "indirect light: static lights", false, why));
+    EXPECT_TRUE(has_decision(report, "indirect light: up", false, why));
+    ASSERT_EQ(maps.contribution.size(), 1u);
+    EXPECT_EQ(maps.contribution[0].channels, 1);  // no bounce: one channel
+  }
 }
 
 // A red wall and a white wall meeting at a corner on a grey floor; a semi-dynamic spot lights the
@@ -140,7 +203,7 @@ TEST(Indirect, LostPhotonsAreReportedNotLoopedOn) {
 // recomposed tint follows the light's colour and intensity.
 struct ColourScene {
   Scene scene;
-  TexelSet texels;  // on the white wall
+  int white_mesh = -1;  // the white wall's mesh
   ColourScene() {
     Material grey;
     grey.albedo = glm::vec3(0.5f);
@@ -152,31 +215,38 @@ struct ColourScene {
     test::add_quad(scene, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, "floor", -1, 0);
     // Red wall at x = -2 facing +x; white wall at z = -2 facing +z.
     test::add_quad(scene, {-2, 0, -2}, {-2, 2, -2}, {-2, 2, 2}, {-2, 0, 2}, "red", -1, 1);
-    test::add_quad(scene, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, "white", -1, 2);
+    white_mesh =
+        test::add_quad(scene, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, "white", -1, 2);
     scene.lights = {
         test::spot_light("spot", {0.0f, 1.0f, 0.5f}, {-1, 0, 0}, 20.0f, 0.2f, 0.35f, true)};
     test::finish(scene);
-    texels = test::grid_texels(16, 8, {-2, 0, -2}, {4, 0, 0}, {0, 2, 0}, {0, 0, 1});
   }
 };
 
 TEST(Indirect, ColourBleedingFollowsTheLight) {
   ColourScene f;
-  auto tracer = make_embree_tracer(f.scene);
+  const test::Prepared p = test::prepare(f.scene, 64);
+  const TexelSet& texels = p.texels;
+  const Layout& layout = p.layout;
+  const Tracer* tracer = p.tracer.get();
   Progress progress(true);
   Report report;
   BakeOptions o;
   o.quality = Quality::kDraft;
   o.photons = 10000;
-  const Layout layout = test::bare_layout(16, 8);
-  const BakedMaps maps = bake_maps(f.scene, layout, f.texels, *tracer, o, progress, report);
+  const BakedMaps maps = bake_maps(f.scene, layout, texels, *tracer, o, progress, report);
   ASSERT_EQ(maps.contribution.size(), 1u);
   const FloatImage& c = maps.contribution[0];
   ASSERT_EQ(c.channels, 3);
-  // Near the corner with the red wall the white wall's light is red.
+  // Near the corner with the red wall (x < -1) the white wall's light is red.
+  auto near_red = [&](int x, int y) {
+    const size_t t = texels.index(x, y);
+    return texels.valid[t] && texels.mesh[t] == f.white_mesh && texels.position[t].x < -1.0f;
+  };
   double r = 0.0, g = 0.0;
-  for (int y = 0; y < 8; ++y) {
-    for (int x = 0; x < 4; ++x) {
+  for (int y = 0; y < texels.height; ++y) {
+    for (int x = 0; x < texels.width; ++x) {
+      if (!near_red(x, y)) continue;
       r += c.at(x, y, 0);
       g += c.at(x, y, 1);
       EXPECT_NEAR(c.at(x, y, 1), c.at(x, y, 2), 1e-6f * std::max(1.0f, c.at(x, y, 1)));
@@ -200,22 +270,26 @@ TEST(Indirect, ColourBleedingFollowsTheLight) {
     lo.intensity = st.intensity;
     state.lights["spot"] = lo;
     const FloatImage direct =
-        bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+        bake_state(f.scene, layout, texels, *tracer, state, o, progress, report);
     double rr = 0.0, gg = 0.0;
-    for (int y = 0; y < 8; ++y) {
-      for (int x = 0; x < 16; ++x) {
+    for (int y = 0; y < texels.height; ++y) {
+      for (int x = 0; x < texels.width; ++x) {
+        if (!texels.valid[texels.index(x, y)]) continue;
         for (int k = 0; k < 3; ++k) {
           const float v = maps.base.at(x, y, k) + st.color[k] * st.intensity * c.at(x, y, k);
-          EXPECT_NEAR(v, direct.at(x, y, k), 1e-5f * std::max(1.0f, direct.at(x, y, k)));
+          // Float rounding, and the bounce terms each solve drops below 2 % of an output step
+          // (bake_state solves at its state's brightness, the maps at the authored one).
+          EXPECT_NEAR(v, direct.at(x, y, k),
+                      1e-5f * std::max(1.0f, direct.at(x, y, k)) + 0.01f * maps.output_step);
         }
-        if (x < 4) {
+        if (near_red(x, y)) {
           rr += direct.at(x, y, 0);
           gg += direct.at(x, y, 1);
         }
       }
     }
     // The tint is the walls' times the light's.
-    EXPECT_NEAR(rr / gg, (r / g) * (st.color.x / st.color.y), 1e-3 * rr / gg);
+    EXPECT_NEAR(rr / gg, (r / g) * (st.color.x / st.color.y), 3e-3 * rr / gg);
   }
 }
 
@@ -224,7 +298,6 @@ TEST(Indirect, ColourBleedingFollowsTheLight) {
 // single-object state, and one cook does not depend on the thread count.
 struct BoxRoom {
   Scene scene;
-  TexelSet texels;
   BoxRoom() {
     Material wall;
     wall.albedo = glm::vec3(0.7f);
@@ -242,21 +315,21 @@ struct BoxRoom {
     test::add_box(scene, {1.0f, 0.0f, 1.0f}, {1.4f, 0.5f, 1.4f}, "stool", 1, 0);
     scene.lights = {test::point_light("lamp", {0.3f, 2.0f, -0.6f}, 5.0f, true)};
     test::finish(scene);
-    texels = test::box_texels({-2, 0, -2}, {2, 2.5f, 2}, 10);
   }
 };
 
 TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
-  BoxRoom f;
-  auto tracer = make_embree_tracer(f.scene);
+  BoxRoom box;
+  const test::Prepared f = test::prepare(box.scene, 96);
+  const Layout& layout = f.layout;
+  const Tracer* tracer = f.tracer.get();
   Progress progress(true);
   Report report;
   BakeOptions o;
   o.quality = Quality::kDraft;
   o.photons = 5000;
   o.virtual_lights = 64;
-  const Layout layout = test::bare_layout(f.texels.width, f.texels.height);
-  const BakedMaps maps = bake_maps(f.scene, layout, f.texels, *tracer, o, progress, report);
+  const BakedMaps maps = bake_maps(box.scene, layout, f.texels, *tracer, o, progress, report);
   ASSERT_EQ(maps.contribution.size(), 1u);
   ASSERT_EQ(maps.contribution[0].channels, 3);
   const ShadowMap* crate = nullptr;
@@ -281,7 +354,7 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
     lo.color[2] = 0.4f;
     state.lights["lamp"] = lo;
     const FloatImage direct =
-        bake_state(f.scene, layout, f.texels, *tracer, state, o, progress, report);
+        bake_state(box.scene, layout, f.texels, *tracer, state, o, progress, report);
     float worst = 0.0f, peak = 0.0f;
     for (int y = 0; y < f.texels.height; ++y) {
       for (int x = 0; x < f.texels.width; ++x) {
@@ -303,8 +376,8 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
   one.threads = 1;
   two.threads = 2;
   Report r1, r2;
-  const BakedMaps a = bake_maps(f.scene, layout, f.texels, *tracer, one, progress, r1);
-  const BakedMaps b = bake_maps(f.scene, layout, f.texels, *tracer, two, progress, r2);
+  const BakedMaps a = bake_maps(box.scene, layout, f.texels, *tracer, one, progress, r1);
+  const BakedMaps b = bake_maps(box.scene, layout, f.texels, *tracer, two, progress, r2);
   EXPECT_EQ(a.base.data, b.base.data);
   EXPECT_EQ(a.contribution[0].data, b.contribution[0].data);
   ASSERT_EQ(a.shadows.size(), b.shadows.size());

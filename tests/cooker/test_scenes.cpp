@@ -1,5 +1,8 @@
 #include "test_scenes.h"
 
+#include "lightpatch/cooker/texel_builder.h"
+#include "lightpatch/cooker/unwrap.h"
+
 namespace lightpatch::test {
 
 using namespace cooker;
@@ -136,6 +139,16 @@ Layout bare_layout(int w, int h) {
   l.width = w;
   l.height = h;
   return l;
+}
+
+Prepared prepare(const cooker::Scene& scene, int lightmap_size) {
+  Prepared p;
+  cooker::LayoutOptions lo;
+  lo.lightmap_size = lightmap_size;
+  p.layout = cooker::build_layout(scene, lo);
+  p.tracer = cooker::make_embree_tracer(scene);
+  p.texels = cooker::build_texels(scene, p.layout, p.tracer.get());
+  return p;
 }
 
 }  // namespace lightpatch::test

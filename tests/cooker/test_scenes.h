@@ -4,11 +4,13 @@
 
 #include <glm/glm.hpp>
 
+#include <memory>
 #include <string>
 
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/scene.h"
 #include "lightpatch/cooker/texels.h"
+#include "lightpatch/cooker/tracer.h"
 
 namespace lightpatch::test {
 
@@ -47,5 +49,15 @@ cooker::TexelSet grid_texels(int w, int h, const glm::vec3& origin, const glm::v
 
 // A layout of the given size with no meshes (the bake reads only the texel set).
 cooker::Layout bare_layout(int w, int h);
+
+// What `lightpatch cook` makes before baking: the layout (a `lightmap_size` page), the tracer and
+// the texels of every surface (bounce light gathers from the light map, so every surface it
+// reflects from needs texels).
+struct Prepared {
+  cooker::Layout layout;
+  std::unique_ptr<cooker::Tracer> tracer;
+  cooker::TexelSet texels;
+};
+Prepared prepare(const cooker::Scene& scene, int lightmap_size);
 
 }  // namespace lightpatch::test

@@ -2,6 +2,9 @@
 // objects are found in one traversal, occluders are double-sided, epsilon scales with the scene.
 #include <gtest/gtest.h>
 
+#include <random>
+#include <vector>
+
 #include "lightpatch/cooker/tracer.h"
 #include "test_scenes.h"
 
@@ -79,6 +82,76 @@ TEST(Tracer, EpsilonScalesWithTheScene) {
   EXPECT_FALSE(a->occluded_static({5e-4f, 1e-3f + a->epsilon(), 5e-4f}, {0, 1, 0}, 0.0f, 1.0f));
   EXPECT_FALSE(b->occluded_static({5e3f, 1e2f + b->epsilon(), 5e3f}, {0, 1, 0}, 0.0f, 1e4f));
   EXPECT_TRUE(b->occluded_static({5e3f, 1e2f + b->epsilon(), 5e3f}, {0, -1, 0}, 0.0f, 1e4f));
+}
+
+// Random segments through a room with a static pillar and two objects: the batch queries give
+// what the single-ray queries give, ray by ray, for any batch length (partial packets included),
+// and count each non-empty ray once.
+TEST(Tracer, BatchQueriesMatchSingleRays) {
+  Scene s;
+  test::add_closed_room(s, {-2, 0, -2}, {2, 3, 2}, 0.1f, "room");
+  test::add_box(s, {-0.3f, 0, -0.3f}, {0.3f, 2.5f, 0.3f}, "pillar");
+  test::add_object_box(s, {0.8f, 0, 0.8f}, {1.4f, 0.6f, 1.4f}, "crate");
+  test::add_object_box(s, {-1.5f, 0, 0.5f}, {-1.0f, 1.0f, 1.2f}, "chest");
+  test::finish(s);
+  auto tr = make_embree_tracer(s);
+  ASSERT_GE(tr->batch_width(), 1);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> pos(-1.9f, 1.9f), height(0.05f, 2.95f), len(0.0f, 6.0f);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  constexpr int kRays = 1003;  // not a multiple of any packet width
+  std::vector<Ray> rays(kRays);
+  for (int i = 0; i < kRays; ++i) {
+    Ray& r = rays[size_t(i)];
+    r.origin = glm::vec3(pos(rng), height(rng), pos(rng));
+    r.dir = glm::normalize(glm::vec3(gauss(rng), gauss(rng), gauss(rng)));
+    r.tmin = tr->epsilon();
+    r.tmax = i % 97 == 0 ? 0.0f : len(rng);  // some empty segments
+  }
+  for (int n : {0, 1, 5, kRays}) {
+    for (bool with_objects : {false, true}) {
+      std::vector<Hit> hits(size_t(n) + 1);
+      hits[size_t(n)].triangle = 12345;  // the batch writes no further than n
+      const uint64_t before = tr->rays_traced();
+      tr->intersect_many(rays.data(), n, hits.data(), with_objects);
+      uint64_t live = 0;
+      for (int i = 0; i < n; ++i) live += rays[size_t(i)].tmax > rays[size_t(i)].tmin ? 1 : 0;
+      EXPECT_EQ(tr->rays_traced() - before, live);
+      EXPECT_EQ(hits[size_t(n)].triangle, 12345);
+      int hit_count = 0;
+      for (int i = 0; i < n; ++i) {
+        const Ray& r = rays[size_t(i)];
+        const Hit one = tr->intersect(r.origin, r.dir, r.tmin, r.tmax, with_objects);
+        const Hit& many = hits[size_t(i)];
+        ASSERT_EQ(many.hit, one.hit) << "ray " << i;
+        if (!one.hit) continue;
+        ++hit_count;
+        EXPECT_EQ(many.mesh, one.mesh) << "ray " << i;
+        EXPECT_EQ(many.triangle, one.triangle) << "ray " << i;
+        EXPECT_NEAR(many.t, one.t, 1e-5f * (1.0f + one.t)) << "ray " << i;
+        EXPECT_NEAR(many.u, one.u, 1e-4f);
+        EXPECT_NEAR(many.v, one.v, 1e-4f);
+        EXPECT_EQ(many.geometric_normal, one.geometric_normal);
+      }
+      if (n == kRays) {
+        EXPECT_GT(hit_count, kRays / 4);  // the comparison saw many hits
+      }
+    }
+    std::vector<uint8_t> blocked(size_t(n) + 1, 7);
+    tr->occluded_static_many(rays.data(), n, blocked.data());
+    EXPECT_EQ(blocked[size_t(n)], 7);
+    int count = 0;
+    for (int i = 0; i < n; ++i) {
+      const Ray& r = rays[size_t(i)];
+      const bool one = tr->occluded_static(r.origin, r.dir, r.tmin, r.tmax);
+      ASSERT_EQ(blocked[size_t(i)], one ? 1 : 0) << "ray " << i;
+      count += one ? 1 : 0;
+    }
+    if (n == kRays) {
+      EXPECT_GT(count, kRays / 4);
+      EXPECT_LT(count, kRays * 3 / 4);  // both answers occur
+    }
+  }
 }
 
 }  // namespace

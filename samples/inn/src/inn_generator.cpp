@@ -740,11 +740,26 @@ Inn InnBuilder::build() {
     full_layout();
   for (Room& r : rooms_) build_shell(r);
   for (Room& r : rooms_) {
+    // The flames are their own node that casts no shadows: a light sits inside its flame, which
+    // must neither block nor swallow it.
+    Parts flames;
+    auto f = r.parts.by_material.find(kFlame);
+    if (f != r.parts.by_material.end()) {
+      flames.by_material.insert(*f);
+      r.parts.by_material.erase(f);
+    }
     const int mesh = scene_.add_mesh("room_" + r.name, r.parts.primitives());
     scenegen::Node n;
     n.name = "room_" + r.name;
     n.mesh = mesh;
     scene_.add_node(n);
+    if (!flames.by_material.empty()) {
+      scenegen::Node fn;
+      fn.name = "flames_" + r.name;
+      fn.mesh = scene_.add_mesh(fn.name, flames.primitives());
+      fn.cast_shadows = false;
+      scene_.add_node(fn);
+    }
   }
 
   // The scripted scenario: light the lights one by one, take the book, collect and place the

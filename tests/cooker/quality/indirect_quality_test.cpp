@@ -19,7 +19,8 @@ constexpr double kPi = 3.14159265358979;
 double furnace_flux(float rho, int n) {
   Scene s = test::furnace_box(rho);
   s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
-  const TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
+  TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
+  texels.albedo.assign(texels.albedo.size(), glm::vec3(rho));  // gathering reads texel albedo
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
   Report report;
@@ -43,7 +44,7 @@ TEST(IndirectQuality, FurnaceAtProduction) {
     float rho;
     double tolerance;
   };
-  for (const Case c : {Case{0.5f, 0.03}, Case{0.9f, 0.05}}) {
+  for (const Case c : {Case{0.5f, 0.01}, Case{0.9f, 0.01}}) {
     const double flux = furnace_flux(c.rho, 24);
     const double expected = 4.0 * kPi / (1.0 - c.rho);
     std::printf("furnace production rho %.2f: flux %.4f, expected %.4f, error %+.2f%%\n", c.rho,

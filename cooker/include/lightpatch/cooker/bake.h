@@ -22,6 +22,13 @@ enum class Quality { kDraft, kPreview, kProduction };
 const char* quality_name(Quality q);
 Quality parse_quality(const std::string& name);  // throws CookError
 
+// How bounce light is computed. kGather (default): final gathering on coarse texels with the
+// light map as radiance cache, multiple bounces by iteration, a geometry-guided denoiser
+// (gather.h). kPhotons: photons merged into virtual indirect lights (seed 004).
+enum class Integrator { kGather, kPhotons };
+const char* integrator_name(Integrator i);
+Integrator parse_integrator(const std::string& name);  // throws CookError
+
 struct BakeOptions {
   Quality quality = Quality::kPreview;
   int area_samples =
@@ -34,6 +41,13 @@ struct BakeOptions {
   // irradiance, Phi / (pi r^2 + A); it darkens receivers within ~sqrt(bias A / pi) of a VPL
   // (near corners), so more, smaller VPLs lose less energy.
   bool indirect = true;
+  Integrator integrator = Integrator::kGather;
+  // Final gathering, per preset: draft level 4 / 64 rays / 2 denoise passes, preview 2 / 256 / 2,
+  // production 2 / 1024 / 1 (at most 3 passes: steps of 1, 2 and 4 coarse texels). The level is the
+  // coarse texel size (1, 2, 4 or 8 light-map texels per axis) at which bounce light is computed.
+  int gather_rays = 0;      // rays per coarse texel; 0 = preset
+  int indirect_level = 0;   // 1, 2, 4 or 8; 0 = preset
+  int denoise = -1;         // a-trous passes, 0..3; < 0 = preset
   int photons = 0;          // photons emitted for the whole scene (split by power); 0 = preset
   int virtual_lights = 0;   // virtual indirect lights for the whole scene; 0 = preset
   float area_bias = -1.0f;  // cosA cosB / (pi r^2 + bias A); < 0 = preset
@@ -51,6 +65,14 @@ struct IndirectPreset {
   float area_bias = 0.0f;
 };
 IndirectPreset indirect_preset(const BakeOptions& options);
+
+// The final-gathering preset after overrides.
+struct GatherPreset {
+  int rays = 0;
+  int level = 1;
+  int denoise = 0;
+};
+GatherPreset gather_preset(const BakeOptions& options);
 
 // Bakes B, every C_l and every interacting S_ol. With indirect light, C_l and S_ol have 3 channels
 // (bounce is tinted by the albedos it met; the pack builder stores 1 where the tint is below the

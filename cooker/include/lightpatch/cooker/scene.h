@@ -34,6 +34,9 @@ struct MeshInstance {
   int primitive_index = 0;  // primitive within the node's mesh
   int object = -1;          // index into Scene::objects if the node is semi-dynamic, else -1
   int material = 0;         // index into Scene::materials (import adds a default material)
+  // false (extras.castShadows: false): the mesh occludes no light and stops no ray (a flame, a
+  // bulb or lamp glass around its light); it is still lit and baked.
+  bool cast_shadows = true;
   std::vector<glm::vec3> positions;  // world space
   std::vector<glm::vec3> normals;    // world space, unit length (import generates if absent)
   std::vector<glm::vec2> uv0;        // TEXCOORD_0 or empty

@@ -20,6 +20,16 @@ struct Hit {
   glm::vec3 geometric_normal{0.0f};  // unit, world space, facing per winding
 };
 
+// One ray of a batch query: the segment origin + t*dir, t in (tmin, tmax). `dir` need not be
+// unit (t is then in its units); a ray with !(tmax > tmin) is skipped (no hit, not blocked, not
+// counted).
+struct Ray {
+  glm::vec3 origin;
+  float tmin;
+  glm::vec3 dir;
+  float tmax;
+};
+
 class Tracer {
  public:
   virtual ~Tracer() = default;
@@ -45,6 +55,24 @@ class Tracer {
     if (occluded_static(origin, dir, tmin, tmax)) return -1;
     return blocking_objects(origin, dir, tmin, tmax, out, max_out);
   }
+  // Batch queries: the same answers as intersect() / occluded_static() for each ray, in fewer
+  // traversal calls (Embree packets). hits[i] / blocked[i] (1 = blocked) answer rays[i]; n >= 0.
+  // The defaults loop over the single-ray calls; tracers override them. Safe to call from any
+  // number of threads at once; they allocate nothing.
+  virtual void intersect_many(const Ray* rays, int n, Hit* hits, bool with_objects) const {
+    for (int i = 0; i < n; ++i) {
+      hits[i] = intersect(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax, with_objects);
+    }
+  }
+  virtual void occluded_static_many(const Ray* rays, int n, uint8_t* blocked) const {
+    for (int i = 0; i < n; ++i) {
+      blocked[i] = occluded_static(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax) ? 1 : 0;
+    }
+  }
+  // Rays a batch query traces together (its packet width): batches of a multiple of it waste no
+  // lanes.
+  virtual int batch_width() const { return 1; }
+  // Rays traced so far by every query (each ray of a batch counts once), over all threads.
   virtual uint64_t rays_traced() const = 0;
 };
 

@@ -86,6 +86,7 @@ struct Node {
   std::vector<int> children{};        // node indices
   bool semi_dynamic = false;          // extras.semiDynamic
   float light_radius = 0.0f;          // > 0 writes extras.lightRadius (metres)
+  bool cast_shadows = true;           // false writes extras.castShadows = false (a flame, a bulb)
 };
 
 enum class BufferStorage {

@@ -1,0 +1,511 @@
+#include "gather.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <unordered_map>
+
+#include "direct_light.h"
+#include "worker_pool.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+// Texels of one block and chart whose normals are within this cosine share a coarse texel; the
+// same cone decides which coarse texel of a neighbouring block continues a surface.
+constexpr float kSameSurfaceCos = 0.7f;
+// Objects a gather ray records before its static hit (more are ignored: they hide the rest).
+constexpr int kMaxCrossed = 8;
+// A texel whose gather rays hit the back of a surface more often than this lies inside solid
+// geometry (where walls meet, under a wall): its rays would see the world beyond the wall, so
+// they are dropped, and rays that land on it are given to the nearest texel that is not buried.
+constexpr float kBuriedFraction = 0.1f;
+// Marks a ray's hit on the back of a surface while the rays are traced.
+constexpr uint32_t kBackFace = 0xFFFFFFFEu;
+
+// Union-find over fine texels: charts are the connected valid texels of one region.
+struct Charts {
+  std::vector<uint32_t> parent;
+  uint32_t find(uint32_t i) {
+    while (parent[i] != i) {
+      parent[i] = parent[parent[i]];
+      i = parent[i];
+    }
+    return i;
+  }
+  void join(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+void basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
+  const float sign = std::copysign(1.0f, w.z);
+  const float a = -1.0f / (sign + w.z);
+  const float c = w.x * w.y * a;
+  t = glm::vec3(1.0f + sign * w.x * w.x * a, sign * c, -sign * w.x);
+  b = glm::vec3(c, sign + w.y * w.y * a, -w.y);
+}
+
+// Cosine-distributed direction about n for the unit square point (u, v).
+glm::vec3 cosine_dir(const glm::vec3& n, float u, float v) {
+  const float r = std::sqrt(u), phi = 2.0f * kPi * v;
+  glm::vec3 t, b;
+  basis(n, t, b);
+  const float z = std::sqrt(std::max(0.0f, 1.0f - u));
+  return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
+}
+
+// The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
+// same mesh, else the nearest such texel within two texels, else kNoTexel.
+uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels, const Hit& h) {
+  const MeshLayout& ml = layout.meshes[size_t(h.mesh)];
+  const size_t t3 = size_t(h.triangle) * 3;
+  if (t3 + 2 >= ml.indices.size()) return kNoTexel;  // a mesh outside the light map
+  const glm::vec2 uv = (1.0f - h.u - h.v) * ml.uv[ml.indices[t3]] +
+                       h.u * ml.uv[ml.indices[t3 + 1]] + h.v * ml.uv[ml.indices[t3 + 2]];
+  const float fx = uv.x * float(texels.width), fy = uv.y * float(texels.height);
+  const int x0 = std::clamp(int(std::floor(fx)), 0, texels.width - 1);
+  const int y0 = std::clamp(int(std::floor(fy)), 0, texels.height - 1);
+  // The texel must sample this side of this surface: a chart of the same mesh beside it in the
+  // page (the other face of a wall slab) must not lend it its light.
+  auto same_surface = [&](size_t t) {
+    return texels.valid[t] && texels.mesh[t] == h.mesh &&
+           glm::dot(texels.normal[t], h.geometric_normal) > kSameSurfaceCos - 0.2f;
+  };
+  const size_t t0 = texels.index(x0, y0);
+  if (same_surface(t0)) return uint32_t(t0);
+  uint32_t best = kNoTexel;
+  float best_d2 = 1e30f;
+  for (int dy = -2; dy <= 2; ++dy) {
+    for (int dx = -2; dx <= 2; ++dx) {
+      const int x = x0 + dx, y = y0 + dy;
+      if (x < 0 || y < 0 || x >= texels.width || y >= texels.height) continue;
+      const size_t t = texels.index(x, y);
+      if (!same_surface(t)) continue;
+      const float ex = float(x) + 0.5f - fx, ey = float(y) + 0.5f - fy;
+      const float d2 = ex * ex + ey * ey;
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        best = uint32_t(t);
+      }
+    }
+  }
+  return best;
+}
+
+// Hits on texel sets made without a layout (tests' hand-made grids): the nearest valid texel to
+// the hit point whose normal faces the same way, within two texel spacings.
+class TexelLocator {
+ public:
+  explicit TexelLocator(const TexelSet& texels) : texels_(texels) {
+    std::vector<float> gaps;
+    for (int y = 0; y < texels.height; ++y)
+      for (int x = 0; x + 1 < texels.width; ++x) {
+        const size_t t = texels.index(x, y);
+        if (texels.valid[t] && texels.valid[t + 1])
+          gaps.push_back(glm::length(texels.position[t + 1] - texels.position[t]));
+      }
+    if (!gaps.empty()) {
+      std::nth_element(gaps.begin(), gaps.begin() + long(gaps.size() / 2), gaps.end());
+      spacing_ = std::max(gaps[gaps.size() / 2], 1e-12f);
+    }
+    cell_ = 2.0f * spacing_;
+    for (size_t t = 0; t < texels.valid.size(); ++t)
+      if (texels.valid[t]) cells_[key(cell_of(texels.position[t]))].push_back(uint32_t(t));
+  }
+
+  uint32_t find(const glm::vec3& p, const glm::vec3& n) const {
+    const glm::ivec3 c = cell_of(p);
+    uint32_t best = kNoTexel;
+    float best_d2 = cell_ * cell_;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          auto it = cells_.find(key(c + glm::ivec3(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (uint32_t t : it->second) {
+            if (glm::dot(texels_.normal[t], n) < 0.5f) continue;
+            const glm::vec3 d = texels_.position[t] - p;
+            const float d2 = glm::dot(d, d);
+            if (d2 < best_d2) {
+              best_d2 = d2;
+              best = t;
+            }
+          }
+        }
+    return best;
+  }
+
+ private:
+  glm::ivec3 cell_of(const glm::vec3& p) const { return glm::ivec3(glm::floor(p / cell_)); }
+  static int64_t key(const glm::ivec3& c) {
+    return (int64_t(c.x) * 73856093) ^ (int64_t(c.y) * 19349663) ^ (int64_t(c.z) * 83492791);
+  }
+  const TexelSet& texels_;
+  float spacing_ = 1.0f, cell_ = 2.0f;
+  std::unordered_map<int64_t, std::vector<uint32_t>> cells_;
+};
+
+}  // namespace
+
+CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads) {
+  const float eps = tracer ? tracer->epsilon() : 0.0f;
+  // Two surface points see each other (both lifted off their surfaces).
+  auto sees = [&](const glm::vec3& pa, const glm::vec3& na, const glm::vec3& pb,
+                  const glm::vec3& nb) {
+    if (!tracer) return true;
+    const glm::vec3 a = pa + na * eps, d = pb + nb * eps - a;
+    const float len = glm::length(d);
+    if (!(len > 2.0f * eps)) return true;
+    return !tracer->occluded_static(a, d / len, eps, len - eps);
+  };
+  CoarseGrid g;
+  g.level = std::max(1, level);
+  const int k = g.level;
+  const int w = texels.width, h = texels.height;
+  g.width = (w + k - 1) / k;
+  g.height = (h + k - 1) / k;
+  const size_t n = size_t(w) * size_t(h);
+  Charts charts;
+  charts.parent.resize(n);
+  std::iota(charts.parent.begin(), charts.parent.end(), 0u);
+  auto same = [&](size_t a, size_t b) {
+    return texels.valid[a] && texels.valid[b] && texels.region[a] == texels.region[b];
+  };
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t t = texels.index(x, y);
+      if (x + 1 < w && same(t, t + 1)) charts.join(uint32_t(t), uint32_t(t + 1));
+      if (y + 1 < h && same(t, t + size_t(w))) charts.join(uint32_t(t), uint32_t(t + size_t(w)));
+    }
+  }
+  // Chart roots, resolved once (find() compresses paths, so it is not shared across threads).
+  std::vector<uint32_t> chart_of(n);
+  for (size_t t = 0; t < n; ++t) chart_of[t] = charts.find(uint32_t(t));
+  // Greedy clusters per block, block rows in parallel: a texel joins the first coarse texel of
+  // its chart whose seed normal is within the cone and which it sees, else seeds a new one.
+  std::vector<std::vector<std::vector<uint32_t>>> row_groups(size_t(g.height));
+  std::vector<std::vector<uint32_t>> row_group_block(size_t(g.height));
+  parallel_for(g.height, threads, [&](int by) {
+    std::vector<uint32_t> block, seeds;
+    for (int bx = 0; bx < g.width; ++bx) {
+      block.clear();
+      for (int y = by * k; y < std::min(h, (by + 1) * k); ++y)
+        for (int x = bx * k; x < std::min(w, (bx + 1) * k); ++x)
+          if (texels.valid[texels.index(x, y)]) block.push_back(uint32_t(texels.index(x, y)));
+      seeds.clear();
+      const size_t first = row_groups[size_t(by)].size();
+      for (uint32_t t : block) {
+        size_t j = 0;
+        for (; j < seeds.size(); ++j) {
+          const uint32_t sd = seeds[j];
+          if (chart_of[sd] == chart_of[t] &&
+              glm::dot(texels.normal[sd], texels.normal[t]) >= kSameSurfaceCos &&
+              sees(texels.position[sd], texels.normal[sd], texels.position[t], texels.normal[t]))
+            break;
+        }
+        if (j == seeds.size()) {
+          seeds.push_back(t);
+          row_groups[size_t(by)].emplace_back();
+          row_group_block[size_t(by)].push_back(
+              uint32_t(size_t(by) * size_t(g.width) + size_t(bx)));
+        }
+        row_groups[size_t(by)][first + j].push_back(t);
+      }
+    }
+  });
+  g.coarse_of.assign(n, kNoTexel);
+  g.block_offset.assign(size_t(g.width) * size_t(g.height) + 1, 0);
+  g.member_offset.push_back(0);
+  size_t next_block = 0;
+  for (int by = 0; by < g.height; ++by) {
+    for (size_t i = 0; i < row_groups[size_t(by)].size(); ++i) {
+      const std::vector<uint32_t>& grp = row_groups[size_t(by)][i];
+      const uint32_t b = row_group_block[size_t(by)][i];
+      while (next_block <= b) g.block_offset[next_block++] = uint32_t(g.chart.size());
+      const uint32_t c = uint32_t(g.chart.size());
+      glm::vec3 p(0.0f), nn(0.0f), a(0.0f);
+      for (uint32_t t : grp) {
+        g.coarse_of[t] = c;
+        g.members.push_back(t);
+        p += texels.position[t];
+        nn += texels.normal[t];
+        a += texels.albedo[t];
+      }
+      const float m = float(grp.size());
+      g.member_offset.push_back(uint32_t(g.members.size()));
+      g.block_of.push_back(b);
+      g.block_coarse.push_back(c);
+      g.chart.push_back(chart_of[grp.front()]);
+      g.position.push_back(p / m);
+      const float len = glm::length(nn);
+      g.normal.push_back(len > 0.0f ? nn / len : texels.normal[grp.front()]);
+      g.albedo.push_back(a / m);
+    }
+  }
+  while (next_block < g.block_offset.size())
+    g.block_offset[next_block++] = uint32_t(g.chart.size());
+  g.alive.assign(g.size(), 1);
+
+  // Neighbour links.
+  const size_t nc = g.size();
+  g.links.assign(nc * size_t(CoarseGrid::kLinks), kNoTexel);
+  parallel_for(int((nc + 255) / 256), threads, [&](int item) {
+    for (size_t c = size_t(item) * 256; c < std::min(nc, size_t(item + 1) * 256); ++c) {
+      const uint32_t b = g.block_of[c];
+      const int bx = int(b % uint32_t(g.width)), by = int(b / uint32_t(g.width));
+      for (int si = 0; si < CoarseGrid::kLinkSteps; ++si) {
+        const int step = 1 << si;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (dx == 0 && dy == 0) continue;
+            const int nx = bx + dx * step, ny = by + dy * step;
+            if (nx < 0 || ny < 0 || nx >= g.width || ny >= g.height) continue;
+            const size_t nb = size_t(ny) * size_t(g.width) + size_t(nx);
+            uint32_t best = kNoTexel;
+            float best_cos = kSameSurfaceCos;
+            for (uint32_t i = g.block_offset[nb]; i < g.block_offset[nb + 1]; ++i) {
+              const uint32_t q = g.block_coarse[i];
+              if (g.chart[q] != g.chart[c]) continue;
+              const float d = glm::dot(g.normal[q], g.normal[c]);
+              if (d >= best_cos) {
+                best_cos = d;
+                best = q;
+              }
+            }
+            if (best != kNoTexel &&
+                !sees(g.position[c], g.normal[c], g.position[best], g.normal[best]))
+              best = kNoTexel;
+            g.links[c * size_t(CoarseGrid::kLinks) + size_t(si) * 8 +
+                    size_t(CoarseGrid::direction(dx, dy))] = best;
+          }
+        }
+      }
+    }
+  });
+  return g;
+}
+
+GatherOperator build_gather(const Scene& scene, const Layout& layout, const TexelSet& texels,
+                            const Tracer& tracer, int level, const GatherOptions& options) {
+  GatherOperator op;
+  op.grid = build_coarse_grid(texels, level, &tracer, options.threads);
+  const CoarseGrid& g = op.grid;
+  const size_t nc = g.size();
+  const int n_rays = std::max(1, options.rays);
+  op.rays = n_rays;
+  op.hit.assign(nc * size_t(n_rays), kNoTexel);
+  const float eps = tracer.epsilon();
+  const float extent = 1.5f * (scene.scale() > 0.0f ? scene.scale() : 1.0f);
+  const uint64_t rays0 = tracer.rays_traced();
+  // Low-discrepancy directions per coarse texel: the R2 sequence, rotated per texel (Cranley-
+  // Patterson) so neighbours do not share a pattern.
+  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
+  // Work items are block rows: each a contiguous range of coarse texels.
+  std::vector<uint32_t> row_first(size_t(g.height) + 1, 0);
+  for (int by = 0; by <= g.height; ++by)
+    row_first[size_t(by)] = g.block_offset[size_t(by) * size_t(g.width)];
+  std::vector<std::vector<Crossing>> row_crossings(size_t(g.height));
+  std::vector<std::vector<CrossingHit>> row_hits(size_t(g.height));
+  std::vector<std::vector<uint32_t>> row_counts(size_t(g.height));
+  // Texel sets made without a layout (tests) find hits by position.
+  std::unique_ptr<TexelLocator> locator;
+  if (layout.meshes.size() != scene.meshes.size()) locator = std::make_unique<TexelLocator>(texels);
+  // While tracing, hits are fine texels (or kBackFace); resolved to coarse texels after.
+  auto to_fine = [&](const Hit& h, const glm::vec3& origin, const glm::vec3& dir) {
+    if (glm::dot(dir, h.geometric_normal) > 0.0f) return kBackFace;
+    return locator ? locator->find(origin + dir * h.t, h.geometric_normal)
+                   : texel_of_hit(layout, texels, h);
+  };
+  parallel_for(g.height, options.threads, [&](int by) {
+    std::vector<Crossing>& cr = row_crossings[size_t(by)];
+    std::vector<CrossingHit>& ch = row_hits[size_t(by)];
+    std::vector<uint32_t>& counts = row_counts[size_t(by)];
+    for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
+      const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
+      const uint64_t hsh = sample_hash(options.seed, c, 0x6761746865ull, 0);
+      const double o1 = hash_to_unit(hsh), o2 = hash_to_unit(sample_hash(hsh, 1, 2, 3));
+      uint32_t crossings_here = 0;
+      for (int k = 0; k < n_rays; ++k) {
+        const uint32_t t = g.members[m0 + uint32_t(k) % mc];
+        double u = o1 + kA1 * double(k + 1), v = o2 + kA2 * double(k + 1);
+        u -= std::floor(u);
+        v -= std::floor(v);
+        const glm::vec3 n = texels.normal[t];
+        const glm::vec3 dir = cosine_dir(n, float(u), float(v));
+        const glm::vec3 origin = texels.position[t] + n * eps;
+        float tmin = eps;
+        Crossing rec{uint32_t(k), uint32_t(ch.size()), 0};
+        uint32_t static_hit = kNoTexel;
+        for (int guard = 0; guard <= kMaxCrossed * 2; ++guard) {
+          const Hit h = tracer.intersect(origin, dir, tmin, extent, true);
+          if (!h.hit) break;
+          const int object = scene.meshes[size_t(h.mesh)].object;
+          if (object < 0) {
+            static_hit = to_fine(h, origin, dir);
+            break;
+          }
+          bool seen = false;
+          for (uint32_t i = rec.first; i < rec.first + rec.count; ++i)
+            seen |= ch[i].object == object;
+          if (!seen && rec.count < uint32_t(kMaxCrossed)) {
+            ch.push_back({object, to_fine(h, origin, dir)});
+            ++rec.count;
+          }
+          tmin = h.t + eps;
+        }
+        op.hit[size_t(c) * size_t(n_rays) + size_t(k)] = static_hit;
+        if (rec.count > 0) {
+          cr.push_back(rec);
+          ++crossings_here;
+        }
+      }
+      counts.push_back(crossings_here);
+    }
+  });
+  // Buried texels, then every hit as a coarse texel.
+  std::vector<uint8_t> buried(texels.valid.size(), 0);
+  parallel_for(int((nc + 255) / 256), options.threads, [&](int item) {
+    std::vector<uint32_t> back, total;
+    for (size_t c = size_t(item) * 256; c < std::min(nc, size_t(item + 1) * 256); ++c) {
+      const uint32_t m0 = g.member_offset[c], mc = g.member_count(uint32_t(c));
+      back.assign(mc, 0);
+      total.assign(mc, 0);
+      for (int k = 0; k < n_rays; ++k) {
+        ++total[uint32_t(k) % mc];
+        back[uint32_t(k) % mc] += op.hit[c * size_t(n_rays) + size_t(k)] == kBackFace ? 1 : 0;
+      }
+      for (uint32_t m = 0; m < mc; ++m)
+        if (float(back[m]) > kBuriedFraction * float(total[m])) buried[g.members[m0 + m]] = 1;
+    }
+  });
+  // A hit on a buried texel moves to the nearest texel of the same surface that is not.
+  auto resolve = [&](uint32_t f) {
+    if (f == kNoTexel || f == kBackFace) return kNoTexel;
+    if (!buried[f]) return g.coarse_of[f];
+    const int x0 = int(f % uint32_t(texels.width)), y0 = int(f / uint32_t(texels.width));
+    uint32_t best = kNoTexel;
+    int best_d2 = 1 << 30;
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int x = x0 + dx, y = y0 + dy;
+        if (x < 0 || y < 0 || x >= texels.width || y >= texels.height) continue;
+        const size_t t = texels.index(x, y);
+        if (!texels.valid[t] || buried[t] || texels.mesh[t] != texels.mesh[f] ||
+            glm::dot(texels.normal[t], texels.normal[f]) < kSameSurfaceCos)
+          continue;
+        if (dx * dx + dy * dy < best_d2) {
+          best_d2 = dx * dx + dy * dy;
+          best = uint32_t(t);
+        }
+      }
+    return best == kNoTexel ? kNoTexel : g.coarse_of[best];
+  };
+  op.weight.assign(nc, 0.0f);
+  op.grid.alive.assign(nc, 0);
+  parallel_for(g.height, options.threads, [&](int by) {
+    std::vector<Crossing>& cr = row_crossings[size_t(by)];
+    std::vector<CrossingHit>& ch = row_hits[size_t(by)];
+    size_t next = 0;
+    for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
+      const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
+      uint32_t used = 0;
+      uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
+      for (int k = 0; k < n_rays; ++k) {
+        const bool drop = buried[g.members[m0 + uint32_t(k) % mc]] != 0;
+        hits[k] = drop ? kNoTexel : resolve(hits[k]);
+        used += drop ? 0 : 1;
+      }
+      const uint32_t count = row_counts[size_t(by)][c - row_first[size_t(by)]];
+      for (size_t i = next; i < next + count; ++i) {
+        const bool drop = buried[g.members[m0 + cr[i].ray % mc]] != 0;
+        for (uint32_t j = cr[i].first; j < cr[i].first + cr[i].count; ++j)
+          ch[j].coarse = drop ? kNoTexel : resolve(ch[j].coarse);
+      }
+      next += count;
+      op.weight[c] = used > 0 ? 1.0f / float(used) : 0.0f;
+      op.grid.alive[c] = used > 0 ? 1 : 0;
+    }
+  });
+  for (uint8_t v : buried) op.buried_texels += v;
+  {
+    double sum = 0.0, count = 0.0;
+    for (size_t c = 0; c < nc; ++c) {
+      if (!g.alive[c]) continue;
+      const glm::vec3 a = g.albedo[c];
+      sum += double(std::max({a.x, a.y, a.z})) * g.member_count(uint32_t(c));
+      count += g.member_count(uint32_t(c));
+    }
+    op.mean_albedo = count > 0.0 ? float(std::min(0.995, sum / count)) : 0.0f;
+  }
+  // Concatenate the rows in order (deterministic for any thread count).
+  op.crossing_offset.assign(nc + 1, 0);
+  op.coarse_crossing.assign(scene.objects.size(), {});
+  {
+    uint32_t c = 0;
+    for (int by = 0; by < g.height; ++by) {
+      const uint32_t base = uint32_t(op.crossing_hits.size());
+      for (size_t i = 0; i < row_counts[size_t(by)].size(); ++i, ++c)
+        op.crossing_offset[c + 1] = op.crossing_offset[c] + row_counts[size_t(by)][i];
+      for (Crossing rec : row_crossings[size_t(by)]) {
+        rec.first += base;
+        op.crossings.push_back(rec);
+      }
+      op.crossing_hits.insert(op.crossing_hits.end(), row_hits[size_t(by)].begin(),
+                              row_hits[size_t(by)].end());
+    }
+    for (uint32_t cc = 0; cc < nc; ++cc) {
+      for (uint32_t i = op.crossing_offset[cc]; i < op.crossing_offset[cc + 1]; ++i) {
+        const Crossing& rec = op.crossings[i];
+        for (uint32_t j = rec.first; j < rec.first + rec.count; ++j) {
+          std::vector<uint32_t>& list = op.coarse_crossing[size_t(op.crossing_hits[j].object)];
+          if (list.empty() || list.back() != cc) list.push_back(cc);
+        }
+      }
+    }
+  }
+  // Tiles and the tiles each tile's rays reach.
+  op.tiles_x = (g.width + GatherOperator::kTile - 1) / GatherOperator::kTile;
+  op.tiles_y = (g.height + GatherOperator::kTile - 1) / GatherOperator::kTile;
+  const size_t n_tiles = size_t(op.tiles_x) * size_t(op.tiles_y);
+  op.tile_of.resize(nc);
+  op.tile_coarse.assign(n_tiles, {});
+  for (uint32_t c = 0; c < nc; ++c) {
+    const uint32_t b = g.block_of[c];
+    const int bx = int(b % uint32_t(g.width)), by = int(b / uint32_t(g.width));
+    const uint32_t tile =
+        uint32_t((by / GatherOperator::kTile) * op.tiles_x + bx / GatherOperator::kTile);
+    op.tile_of[c] = tile;
+    op.tile_coarse[tile].push_back(c);
+  }
+  op.sources.assign(n_tiles, {});
+  parallel_for(int(n_tiles), options.threads, [&](int tile) {
+    std::vector<uint32_t>& src = op.sources[size_t(tile)];
+    for (uint32_t c : op.tile_coarse[size_t(tile)]) {
+      const uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
+      for (int k = 0; k < n_rays; ++k)
+        if (hits[k] != kNoTexel) src.push_back(op.tile_of[hits[k]]);
+      for (uint32_t i = op.crossing_offset[c]; i < op.crossing_offset[c + 1]; ++i) {
+        const Crossing& rec = op.crossings[i];
+        for (uint32_t j = rec.first; j < rec.first + rec.count; ++j)
+          if (op.crossing_hits[j].coarse != kNoTexel)
+            src.push_back(op.tile_of[op.crossing_hits[j].coarse]);
+      }
+      if (src.size() > 4096) {  // keep the scratch small on big tiles
+        std::sort(src.begin(), src.end());
+        src.erase(std::unique(src.begin(), src.end()), src.end());
+      }
+    }
+    std::sort(src.begin(), src.end());
+    src.erase(std::unique(src.begin(), src.end()), src.end());
+  });
+  op.rays_traced = tracer.rays_traced() - rays0;
+  return op;
+}
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,122 @@
+// Final gathering for indirect light (the production integrator). Indirect light is smooth, so it
+// is computed on coarse texels: the texels of one chart in one k x k block of the light map (k =
+// the indirect level: 1, 2, 4 or 8), split further where normals differ. From every coarse texel
+// N cosine-distributed rays leave its member texels; each is traced once, with the semi-dynamic
+// objects, and what it hits is kept as a coarse texel index (the radiance cache is the light map
+// itself, at the coarse level). Bounce light of any light group and any set of present objects is
+// then a sum of sparse gathers over those stored rays, with no more tracing:
+//
+//   I = G (rho D + rho I)        D: the group's direct irradiance, I: its indirect irradiance
+//
+// solved as a Neumann series (bounce by bounce). With objects present a ray ends at the first
+// present object it crosses instead of its static hit; the rays that cross objects are few and
+// kept apart, so an object's change to a group's bounce light is a sparse correction of the same
+// sums (indirect_solve.h). Every step is linear in the light and uses the same rays, so a
+// recomposed state equals bake_state of that state to rounding.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <vector>
+
+#include "lightpatch/cooker/layout.h"
+#include "lightpatch/cooker/scene.h"
+#include "lightpatch/cooker/texels.h"
+#include "lightpatch/cooker/tracer.h"
+
+namespace lightpatch::cooker {
+
+constexpr uint32_t kNoTexel = 0xFFFFFFFFu;
+
+// The coarse texels of one indirect level.
+struct CoarseGrid {
+  int level = 1;                        // k: fine texels per coarse texel per axis
+  int width = 0, height = 0;            // blocks: ceil(fine / k)
+  std::vector<uint32_t> coarse_of;      // fine texel -> coarse texel (kNoTexel if not valid)
+  std::vector<uint32_t> member_offset;  // coarse -> [offset, next offset) into members
+  std::vector<uint32_t> members;        // fine texels, in row order
+  std::vector<uint32_t> block_of;       // coarse -> block index (by * width + bx)
+  std::vector<uint32_t> block_offset;   // block -> [offset, next) into block_coarse
+  std::vector<uint32_t> block_coarse;   // coarse texels of each block
+  std::vector<uint32_t> chart;          // coarse -> chart (connected valid texels of a region)
+  std::vector<glm::vec3> position;      // coarse -> mean member position
+  std::vector<glm::vec3> normal;        // coarse -> normalized mean member normal
+  std::vector<glm::vec3> albedo;        // coarse -> mean member albedo
+  // Neighbours that continue each coarse texel's surface: for step s = 1, 2, 4 blocks
+  // (kLinkSteps) and the 8 directions around it, the coarse texel of that block with the same
+  // chart, a normal within the clustering cone and an unblocked line of sight, or kNoTexel.
+  // kLinks entries per coarse texel. The denoiser and the magnification read only these, so
+  // nothing is ever blended through a wall.
+  static constexpr int kLinkSteps = 3;
+  static constexpr int kLinks = kLinkSteps * 8;
+  std::vector<uint32_t> links;
+  // 0 for a coarse texel whose members are all buried in solid geometry (gather.cpp): it has no
+  // value of its own, and neighbours do not read it.
+  std::vector<uint8_t> alive;
+  size_t size() const { return chart.size(); }
+  uint32_t member_count(uint32_t c) const { return member_offset[c + 1] - member_offset[c]; }
+  // Direction d (0..7) of (dx, dy) in {-1, 0, 1}^2 without (0, 0), row by row.
+  static int direction(int dx, int dy) {
+    const int i = (dy + 1) * 3 + (dx + 1);
+    return i < 4 ? i : i - 1;
+  }
+  uint32_t link(uint32_t c, int step_index, int dx, int dy) const {
+    return links[size_t(c) * kLinks + size_t(step_index) * 8 + size_t(direction(dx, dy))];
+  }
+};
+
+// Groups the valid texels into coarse texels of level k (1, 2, 4 or 8): per block, by chart, by
+// normal, and by line of sight (`tracer`, may be null in tests: a floor texel beyond a wall that
+// stands on it is not grouped with the floor inside), and links the neighbours.
+CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads);
+
+// A ray that crosses semi-dynamic objects before its static hit: what it hits in each.
+struct Crossing {
+  uint32_t ray = 0;    // index within its coarse texel's rays
+  uint32_t first = 0;  // into GatherOperator::crossing_hits
+  uint32_t count = 0;  // objects crossed, nearest first
+};
+struct CrossingHit {
+  int32_t object = 0;          // Scene::objects index
+  uint32_t coarse = kNoTexel;  // coarse texel hit on the object (kNoTexel: its back, or unmapped)
+};
+
+struct GatherOptions {
+  int rays = 256;  // per coarse texel
+  uint64_t seed = 1;
+  int threads = 1;
+};
+
+struct GatherOperator {
+  CoarseGrid grid;
+  int rays = 0;
+  // Static hit of every ray (objects absent) as a coarse texel, kNoTexel for a miss or the back
+  // of a surface: rays * grid.size() entries, coarse texel c's rays at [c * rays, (c+1) * rays).
+  std::vector<uint32_t> hit;
+  // 1 / the rays each coarse texel keeps (those of buried members are dropped); 0 if none.
+  std::vector<float> weight;
+  size_t buried_texels = 0;
+  // Mean albedo (largest channel) over the texels that gather, at most 0.995: how slowly the
+  // bounce series converges.
+  float mean_albedo = 0.0f;
+  std::vector<uint32_t> crossing_offset;  // coarse -> [offset, next) into crossings
+  std::vector<Crossing> crossings;
+  std::vector<CrossingHit> crossing_hits;
+  std::vector<std::vector<uint32_t>> coarse_crossing;  // object -> coarse texels with a crossing
+  // Activity: receivers are grouped in tiles of kTile x kTile blocks; sources[t] lists the tiles
+  // whose coarse texels tile t's rays can reach (static and object hits), so a gather of a sparse
+  // source only visits the receivers that can see it.
+  static constexpr int kTile = 8;
+  int tiles_x = 0, tiles_y = 0;
+  std::vector<uint32_t> tile_of;                   // coarse -> tile
+  std::vector<std::vector<uint32_t>> tile_coarse;  // tile -> its coarse texels
+  std::vector<std::vector<uint32_t>> sources;      // tile -> source tiles (sorted, unique)
+  uint64_t rays_traced = 0;
+};
+
+// Traces every coarse texel's gather rays. `layout` maps hits to light-map texels.
+GatherOperator build_gather(const Scene& scene, const Layout& layout, const TexelSet& texels,
+                            const Tracer& tracer, int level, const GatherOptions& options);
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,298 @@
+#include "indirect_solve.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "worker_pool.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+constexpr uint32_t kChunk = 256;  // receivers per work item
+
+float max3(const glm::vec3& v) {
+  return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+}
+
+glm::vec3 at(const CoarseMap& m, uint32_t c) {
+  return c == kNoTexel ? glm::vec3(0.0f) : m[c];
+}
+
+// The first object of a crossing that is present, as its hit; kNoTexel + false if none is.
+bool present_hit(const GatherOperator& op, const Crossing& rec, const std::vector<uint8_t>& present,
+                 uint32_t* coarse) {
+  for (uint32_t j = rec.first; j < rec.first + rec.count; ++j) {
+    const CrossingHit& h = op.crossing_hits[j];
+    if (present[size_t(h.object)]) {
+      *coarse = h.coarse;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Receivers whose rays can reach a non-zero source, plus `extra`, in coarse order.
+std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& src,
+                                   const std::vector<uint32_t>& extra) {
+  const size_t n_tiles = op.tile_coarse.size();
+  std::vector<uint8_t> active(n_tiles, 0);
+  for (uint32_t c = 0; c < src.size(); ++c)
+    if (src[c] != glm::vec3(0.0f)) active[op.tile_of[c]] = 1;
+  std::vector<uint8_t> take(src.size(), 0);
+  for (size_t t = 0; t < n_tiles; ++t) {
+    bool any = false;
+    for (uint32_t s : op.sources[t]) {
+      if (active[s]) {
+        any = true;
+        break;
+      }
+    }
+    if (any)
+      for (uint32_t c : op.tile_coarse[t]) take[c] = 1;
+  }
+  for (uint32_t c : extra) take[c] = 1;
+  std::vector<uint32_t> out;
+  for (uint32_t c = 0; c < take.size(); ++c)
+    if (take[c]) out.push_back(c);
+  return out;
+}
+
+// out[c] = mean over c's rays of src at what the ray hits with `present` objects in place, for
+// every receiver c (others untouched: the caller zeroes `out`).
+void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
+                 const CoarseMap& src, const std::vector<uint32_t>& receivers, int threads,
+                 CoarseMap& out) {
+  const bool objects = !present.empty();
+  const int items = int((receivers.size() + kChunk - 1) / kChunk);
+  parallel_for(items, threads, [&](int item) {
+    const size_t end = std::min(receivers.size(), size_t(item + 1) * kChunk);
+    for (size_t i = size_t(item) * kChunk; i < end; ++i) {
+      const uint32_t c = receivers[i];
+      const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
+      glm::vec3 sum(0.0f);
+      for (int k = 0; k < op.rays; ++k)
+        if (hits[k] != kNoTexel) sum += src[hits[k]];
+      if (objects) {
+        for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
+          const Crossing& rec = op.crossings[r];
+          uint32_t oc = kNoTexel;
+          if (!present_hit(op, rec, present, &oc)) continue;
+          sum += at(src, oc) - at(src, hits[rec.ray]);
+        }
+      }
+      out[c] = sum * op.weight[c];
+    }
+  });
+}
+
+// Drops terms below the tolerance; returns whether any is left.
+bool prune(CoarseMap& delta, float tolerance) {
+  bool any = false;
+  for (glm::vec3& v : delta) {
+    if (max3(v) < tolerance)
+      v = glm::vec3(0.0f);
+    else
+      any = true;
+  }
+  return any;
+}
+
+// Continues a Neumann series whose first term is `delta`: adds every bounce to `sum`.
+void bounce_on(const GatherOperator& op, const std::vector<uint8_t>& present, CoarseMap delta,
+               const SolveOptions& options, SolveStats* stats, CoarseMap& sum) {
+  const CoarseGrid& g = op.grid;
+  const std::vector<uint32_t> none;
+  for (int b = 0;; ++b) {
+    for (size_t c = 0; c < sum.size(); ++c) sum[c] += delta[c];
+    if (stats) stats->bounces = b + 1;
+    if (b + 1 >= options.max_bounces || !prune(delta, options.tolerance)) break;
+    for (size_t c = 0; c < delta.size(); ++c) delta[c] *= g.albedo[c];
+    const std::vector<uint32_t> receivers = receivers_of(op, delta, none);
+    CoarseMap next(delta.size(), glm::vec3(0.0f));
+    gather_into(op, present, delta, receivers, options.threads, next);
+    if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
+    delta.swap(next);
+  }
+}
+
+}  // namespace
+
+CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const FloatImage& d) {
+  const size_t ch = size_t(d.channels);
+  return coarse_source_of(op, texels, [&](size_t t) {
+    const float* v = d.data.data() + t * ch;
+    return ch == 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]);
+  });
+}
+
+CoarseMap solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
+                         const CoarseMap& source, const SolveOptions& options, SolveStats* stats) {
+  CoarseMap sum(source.size(), glm::vec3(0.0f));
+  const std::vector<uint32_t> none;
+  const std::vector<uint32_t> receivers = receivers_of(op, source, none);
+  CoarseMap first(source.size(), glm::vec3(0.0f));
+  gather_into(op, present, source, receivers, options.threads, first);
+  if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
+  bounce_on(op, present, std::move(first), options, stats, sum);
+  return sum;
+}
+
+CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
+                       const CoarseMap& empty_total, const CoarseMap& direct_change,
+                       const SolveOptions& options, SolveStats* stats) {
+  const size_t nc = op.grid.size();
+  // Receivers with a ray that now ends on a present object.
+  std::vector<uint32_t> crossing;
+  for (size_t o = 0; o < present.size(); ++o) {
+    if (!present[o]) continue;
+    crossing.insert(crossing.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
+  }
+  std::sort(crossing.begin(), crossing.end());
+  crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+  // First bounce: the blocked direct light's radiance through the rays as they now end, and the
+  // radiance those rays no longer see (the static hit's) against what they see instead.
+  CoarseMap first(nc, glm::vec3(0.0f));
+  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, crossing);
+  gather_into(op, present, direct_change, receivers, options.threads, first);
+  if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
+  for (uint32_t c : crossing) {
+    glm::vec3 sum(0.0f);
+    for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
+      const Crossing& rec = op.crossings[r];
+      uint32_t oc = kNoTexel;
+      if (!present_hit(op, rec, present, &oc)) continue;
+      sum += at(empty_total, op.hit[size_t(c) * size_t(op.rays) + rec.ray]) - at(empty_total, oc);
+    }
+    first[c] += sum * op.weight[c];
+  }
+  CoarseMap change(nc, glm::vec3(0.0f));
+  bounce_on(op, present, std::move(first), options, stats, change);
+  return change;
+}
+
+float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
+                        const CoarseMap& empty_total) {
+  float best = 0.0f;
+  std::vector<uint32_t> receivers;
+  for (size_t o = 0; o < present.size(); ++o)
+    if (present[o])
+      receivers.insert(receivers.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
+  for (uint32_t c : receivers) {
+    glm::vec3 sum(0.0f);
+    for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
+      const Crossing& rec = op.crossings[r];
+      uint32_t oc = kNoTexel;
+      if (!present_hit(op, rec, present, &oc)) continue;
+      sum += at(empty_total, op.hit[size_t(c) * size_t(op.rays) + rec.ray]) - at(empty_total, oc);
+    }
+    best = std::max(best, max3(sum * op.weight[c]));
+  }
+  return best;
+}
+
+CoarseMap total_radiance(const GatherOperator& op, const CoarseMap& source,
+                         const CoarseMap& indirect) {
+  CoarseMap out(source.size());
+  for (size_t c = 0; c < out.size(); ++c) out[c] = source[c] + op.grid.albedo[c] * indirect[c];
+  return out;
+}
+
+void denoise(const CoarseGrid& grid, int levels, CoarseMap& map) {
+  levels = std::min(levels, CoarseGrid::kLinkSteps);
+  if (levels <= 0 || map.empty()) return;
+  const size_t nc = grid.size();
+  // World distance between neighbouring coarse texels (median over the map): the scale of the
+  // plane-distance weight.
+  std::vector<float> gaps;
+  for (uint32_t c = 0; c < nc; c += std::max<uint32_t>(1, uint32_t(nc / 4096))) {
+    const uint32_t r = grid.link(c, 0, 1, 0);
+    if (r != kNoTexel) gaps.push_back(glm::length(grid.position[r] - grid.position[c]));
+  }
+  float spacing = 1.0f;
+  if (!gaps.empty()) {
+    std::nth_element(gaps.begin(), gaps.begin() + long(gaps.size() / 2), gaps.end());
+    spacing = std::max(gaps[gaps.size() / 2], 1e-12f);
+  }
+  constexpr float kKernel[3] = {0.25f, 0.5f, 0.25f};
+  CoarseMap out(nc);
+  for (int level = 0; level < levels; ++level) {
+    const float sigma = float(1 << level) * spacing;
+    for (uint32_t c = 0; c < nc; ++c) {
+      glm::vec3 sum(0.0f);
+      float wsum = 0.0f;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const uint32_t q = dx == 0 && dy == 0 ? c : grid.link(c, level, dx, dy);
+          if (q == kNoTexel || !grid.alive[q]) continue;
+          const float nd = std::max(0.0f, glm::dot(grid.normal[c], grid.normal[q]));
+          const float n2 = nd * nd, n4 = n2 * n2;
+          const float plane = glm::dot(grid.normal[c], grid.position[q] - grid.position[c]) / sigma;
+          const float w = kKernel[dx + 1] * kKernel[dy + 1] * n4 * n4 * std::exp(-plane * plane);
+          sum += w * map[q];
+          wsum += w;
+        }
+      }
+      out[c] = wsum > 0.0f ? sum / wsum : map[c];
+    }
+    map.swap(out);
+  }
+}
+
+void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
+                   FloatImage& fine, float scale) {
+  const int k = grid.level;
+  const float inv_k = 1.0f / float(k);
+  for (int y = 0; y < texels.height; ++y) {
+    for (int x = 0; x < texels.width; ++x) {
+      const size_t t = texels.index(x, y);
+      const uint32_t own = grid.coarse_of[t];
+      if (own == kNoTexel) continue;
+      glm::vec3 v;
+      if (k == 1 && grid.alive[own]) {
+        v = map[own];
+      } else {
+        const float cx = (float(x) + 0.5f) * inv_k - 0.5f, cy = (float(y) + 0.5f) * inv_k - 0.5f;
+        const int x0 = int(std::floor(cx)), y0 = int(std::floor(cy));
+        const float fx = cx - float(x0), fy = cy - float(y0);
+        const uint32_t b = grid.block_of[own];
+        const int obx = int(b % uint32_t(grid.width)), oby = int(b / uint32_t(grid.width));
+        glm::vec3 sum(0.0f);
+        float wsum = 0.0f;
+        for (int j = 0; j < 2; ++j) {
+          for (int i = 0; i < 2; ++i) {
+            const int dx = x0 + i - obx, dy = y0 + j - oby;
+            const uint32_t q = dx == 0 && dy == 0 ? own : grid.link(own, 0, dx, dy);
+            if (q == kNoTexel || !grid.alive[q]) continue;
+            const float w = (i ? fx : 1.0f - fx) * (j ? fy : 1.0f - fy);
+            sum += w * map[q];
+            wsum += w;
+          }
+        }
+        if (wsum > 0.0f) {
+          v = sum / wsum;
+        } else {  // a buried texel: the mean of the neighbours that have a value
+          v = glm::vec3(0.0f);
+          float n = 0.0f;
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const uint32_t q = dx == 0 && dy == 0 ? kNoTexel : grid.link(own, 0, dx, dy);
+              if (q == kNoTexel || !grid.alive[q]) continue;
+              v += map[q];
+              n += 1.0f;
+            }
+          if (n > 0.0f) v /= n;
+        }
+      }
+      for (int ch = 0; ch < 3; ++ch) fine.at(x, y, ch) += scale * v[ch];
+    }
+  }
+}
+
+float peak(const CoarseMap& map) {
+  float p = 0.0f;
+  for (const glm::vec3& v : map) p = std::max(p, max3(v));
+  return p;
+}
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,91 @@
+// Bounce light from the stored gather rays (gather.h): a light group's indirect irradiance, the
+// change a set of present objects makes to it, and one scene state's, each a Neumann series of
+// sparse gathers; a geometry-guided denoiser and the magnification of coarse maps into the light
+// map. Everything here is linear in the light and independent of the values it filters, so the
+// semi-dynamic decomposition (C_l, S_ol = C_l - T_ol, pair corrections) stays exact.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <vector>
+
+#include "gather.h"
+#include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/texels.h"
+
+namespace lightpatch::cooker {
+
+// Irradiance (or radiance source) per coarse texel, RGB.
+using CoarseMap = std::vector<glm::vec3>;
+
+struct SolveOptions {
+  // Bounce terms below this (irradiance, the map's units) are dropped: the series stops when a
+  // bounce adds less everywhere. A fraction of the group's significance threshold.
+  float tolerance = 0.0f;
+  int max_bounces = 256;
+  int threads = 1;
+};
+
+struct SolveStats {
+  int bounces = 0;
+  uint64_t gathers = 0;  // stored rays read
+};
+
+// The radiance source of fine irradiance: per coarse texel, the mean of albedo * value(texel)
+// over its members (value: fine texel index -> RGB irradiance).
+template <typename Value>
+CoarseMap coarse_source_of(const GatherOperator& op, const TexelSet& texels, const Value& value) {
+  const CoarseGrid& g = op.grid;
+  CoarseMap out(g.size(), glm::vec3(0.0f));
+  for (uint32_t c = 0; c < g.size(); ++c) {
+    glm::vec3 s(0.0f);
+    for (uint32_t i = g.member_offset[c]; i < g.member_offset[c + 1]; ++i) {
+      const uint32_t t = g.members[i];
+      s += texels.albedo[t] * value(size_t(t));
+    }
+    out[c] = s / float(g.member_count(c));
+  }
+  return out;
+}
+
+// The same for a fine map (3 channels, or 1 for grey).
+CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const FloatImage& d);
+
+// Indirect irradiance with the objects `present` (one byte per Scene object; empty: none) in
+// place: I = G_V (source + albedo * I).
+CoarseMap solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
+                         const CoarseMap& source, const SolveOptions& options,
+                         SolveStats* stats = nullptr);
+
+// What the objects `present` change in a group's indirect light: I_empty - I_present, given the
+// group's radiance with no object present (`empty_total` = source + albedo * I_empty) and the
+// radiance source of the direct light the objects block (`direct_change`, from the fine change
+// D_empty - D_present). Only the receivers that can see a change are visited.
+CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
+                       const CoarseMap& empty_total, const CoarseMap& direct_change,
+                       const SolveOptions& options, SolveStats* stats = nullptr);
+
+// The largest first-bounce change that objects `present` make where they block no direct light:
+// per receiver, the mean over its rays that now end on them of what those rays saw before
+// against what they see now. A cheap bound on whether solve_change() is worth running.
+float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
+                        const CoarseMap& empty_total);
+
+// albedo * map + source (the radiance a solved group sends on).
+CoarseMap total_radiance(const GatherOperator& op, const CoarseMap& source,
+                         const CoarseMap& indirect);
+
+// Edge-avoiding a-trous filter over `levels` passes (steps 1, 2, 4, ... blocks), weights from the
+// coarse texels' charts, normals and planes only (never from values): linear, so it commutes
+// with the decomposition. 0 levels: no filtering.
+void denoise(const CoarseGrid& grid, int levels, CoarseMap& map);
+
+// Adds the coarse map, magnified bilinearly within each chart, to `fine` (3 channels), scaled.
+void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
+                   FloatImage& fine, float scale = 1.0f);
+
+// Largest component of any coarse value.
+float peak(const CoarseMap& map);
+
+}  // namespace lightpatch::cooker
