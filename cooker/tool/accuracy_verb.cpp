@@ -198,7 +198,9 @@ Metrics compare(const std::vector<float>& map, const FloatImage& ref, const Refe
 std::vector<float> recompose_authored(const std::vector<uint8_t>& pack) {
   PackView view;
   Error error;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+  // The CPU reference takes float maps: only the format is checked, not the GLES runtime's limits.
+  if (PackView::open(pack.data(), pack.size(), RecomposeLimits::format_only(), &view, &error) !=
+      Status::kOk) {
     throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
   }
   SceneState state;
@@ -461,7 +463,8 @@ struct RuntimeRow {
 uint64_t atlas_bytes_of(const std::vector<uint8_t>& pack) {
   PackView view;
   Error error;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+  if (PackView::open(pack.data(), pack.size(), RecomposeLimits::format_only(), &view, &error) !=
+      Status::kOk) {
     throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
   }
   uint64_t bytes = 0;
@@ -477,7 +480,8 @@ double cpu_rebuild_ms(const std::vector<uint8_t>& pack, int reps) {
   Error error;
   SceneState state;
   CpuRecomposer recomposer;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk ||
+  if (PackView::open(pack.data(), pack.size(), RecomposeLimits::format_only(), &view, &error) !=
+          Status::kOk ||
       state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
     throw CookError(std::string("accuracy: recompose: ") + error.message);
   }
