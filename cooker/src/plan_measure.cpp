@@ -42,11 +42,11 @@ json run_summary(const json& root) {
   return out;
 }
 
-json count_decisions(const json& root, const std::string& prefix) {
+json count_decisions(const json& root, const std::string& kind) {
   int taken = 0, skipped = 0;
   if (root.contains("decisions")) {
     for (const json& d : root["decisions"]) {
-      if (!starts_with(d["what"].get<std::string>(), prefix)) continue;
+      if (d.value("kind", "") != kind) continue;
       (d["taken"].get<bool>() ? taken : skipped)++;
     }
   }
@@ -68,15 +68,15 @@ void add_plan_measurement(json& planned, const json& forced) {
   const json& f = plan["forced"];
   for (const char* k : {"seconds", "rays", "pack_bytes", "atlas_bytes", "patches"})
     plan["saved"][k] = f[k].get<double>() - p[k].get<double>();
-  const std::pair<const char*, const char*> categories[] = {
-      {"pairs", "pair "},
-      {"overlap_corrections", "overlap correction "},
-      {"indirect_groups", "indirect light: "},
-      {"object_bounce", "indirect bounce: "},
-      {"static_shadows", "static shadow of object "}};
-  for (const auto& [name, prefix] : categories) {
-    plan["categories"][name] = {{"planned", count_decisions(planned, prefix)},
-                                {"forced", count_decisions(forced, prefix)}};
+  // Report categories by decision kind (bake_plan.h).
+  const std::pair<const char*, const char*> categories[] = {{"pairs", "pair"},
+                                                            {"overlap_corrections", "overlap"},
+                                                            {"indirect_groups", "group_bounce"},
+                                                            {"object_bounce", "object_bounce"},
+                                                            {"static_shadows", "static_shadow"}};
+  for (const auto& [name, kind] : categories) {
+    plan["categories"][name] = {{"planned", count_decisions(planned, kind)},
+                                {"forced", count_decisions(forced, kind)}};
   }
   plan["categories"]["colour"] = {{"planned", colour_counts(planned)},
                                   {"forced", colour_counts(forced)},
@@ -114,20 +114,19 @@ void add_plan_measurement(json& planned, const json& forced) {
       if (d["taken"].get<bool>() || it == forced_decision.end() ||
           !(*it->second)["taken"].get<bool>())
         continue;
-      const std::string group_prefix = "indirect light: ";
-      if (starts_with(what, group_prefix)) {
-        const std::string group = what.substr(group_prefix.size());
+      if (d.value("kind", "") == "group_bounce") {
+        const std::string group = d.value("light", "static lights");
         if (!pg.contains(group) || !fg.contains(group)) continue;
         d["time_saved_s"] = fg[group].get<double>() - pg[group].get<double>();
         d["time_saved_covers"] =
-            "the group's whole pass, forced minus planned: its gather, its objects' bounce and "
-            "the pairs its indirect light makes candidates";
+            "the group's whole pass, forced minus planned: its bounce light, its objects' "
+            "changes to it and the pairs it keeps";
         ++timed;
       } else if (it->second->contains("seconds")) {
         d["time_saved_s"] = (*it->second)["seconds"];
         d["time_saved_covers"] =
-            "the forced run's work for this decision alone (an object's photon changes; the "
-            "gather of its virtual lights is part of the light's pass)";
+            "the forced run's work for this decision alone (an object's change to a group's "
+            "bounce light)";
         ++timed;
       }
     }
@@ -135,7 +134,7 @@ void add_plan_measurement(json& planned, const json& forced) {
   plan["decisions_timed"] = timed;
   plan["note"] =
       "forced: the same scene, options and seed with the effect plan off (--no-plan): every "
-      "light group that emits photons gets indirect light with every object's bounce, every "
+      "light group keeps its bounce light with every object's change to it, every "
       "light-object pair is traced and kept, every measured overlap correction kept, every "
       "3-channel patch kept at 3 channels. Both runs are timed after the cook's own bake (which "
       "pays one-time warm-up costs), forced first; seconds are wall-clock on a possibly shared "

@@ -1,5 +1,5 @@
 // The `accuracy` verb (DESIGN.md, "Accuracy has a price tag"): sweeps the cook's quality knobs
-// (presets, photons, virtual indirect lights, area-light samples, texel density, 8-bit encoding),
+// (presets, gather rays, indirect level, denoising, area-light samples, texel density, encoding),
 // cooks the scene with each setting, recomposes the authored state from the pack on the CPU
 // reference and measures it against a reference bake of the same state (bake_state at several
 // times production's settings, cached on disk). Writes a CSV (one row per setting) and a PNG plot
@@ -44,7 +44,7 @@ namespace {
 
 using namespace lightpatch::cooker;
 
-// The reference: production's integrator with kReferenceFactor times its photons, virtual lights
+// The reference: production's integrator with kReferenceFactor times its gather rays
 // and area samples (kQuickReferenceFactor with --quick; --reference-scale), and a seed of its own
 // so that its noise
 // is independent of the sweep's.
@@ -312,14 +312,19 @@ std::vector<Setting> make_sweep(const AccuracyOptions& o, bool has_area_lights, 
   }
   // Each knob swept around the preview preset, the others at preview's values.
   const Quality p = Quality::kPreview;
-  for (int n : {10000, 30000, 60000, 250000, 500000}) {
-    Setting x = turned(p, "photons=" + std::to_string(n), "photons");
-    x.bake.photons = n;
+  for (int n : {32, 64, 128, 512, 1024}) {
+    Setting x = turned(p, "gather_rays=" + std::to_string(n), "gather rays");
+    x.bake.gather_rays = n;
     s.push_back(x);
   }
-  for (int n : {64, 192, 1024, 2048, 4096}) {
-    Setting x = turned(p, "virtual_lights=" + std::to_string(n), "virtual lights");
-    x.bake.virtual_lights = n;
+  for (int n : {1, 4, 8}) {
+    Setting x = turned(p, "indirect_level=" + std::to_string(n), "indirect level");
+    x.bake.indirect_level = n;
+    s.push_back(x);
+  }
+  for (int n : {0, 1, 3}) {
+    Setting x = turned(p, "denoise=" + std::to_string(n), "denoise");
+    x.bake.denoise = n;
     s.push_back(x);
   }
   if (has_area_lights) {
@@ -355,9 +360,11 @@ const char* encoding_name(EncodingPolicy e) {
 
 bool same_bake(const Setting& a, const Setting& b) {
   return a.lightmap_size == b.lightmap_size && a.bake.quality == b.bake.quality &&
-         a.bake.photons == b.bake.photons && a.bake.virtual_lights == b.bake.virtual_lights &&
+         gather_preset(a.bake).rays == gather_preset(b.bake).rays &&
+         gather_preset(a.bake).level == gather_preset(b.bake).level &&
+         gather_preset(a.bake).denoise == gather_preset(b.bake).denoise &&
          a.bake.area_samples == b.bake.area_samples && a.bake.seed == b.bake.seed &&
-         a.bake.indirect == b.bake.indirect && a.bake.area_bias == b.bake.area_bias;
+         a.bake.indirect == b.bake.indirect;
 }
 
 void mark_pareto(std::vector<Row>& rows) {
@@ -385,21 +392,23 @@ std::string number(double v, const char* format = "%.6g") {
 std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string>& notes) {
   std::string s;
   for (const std::string& n : notes) s += "# " + n + "\n";
-  s += "setting,knob,quality,photons,virtual_lights,area_samples,lightmap_size,encoding,cook_s,"
+  s += "setting,knob,quality,gather_rays,indirect_level,denoise,area_samples,lightmap_size,"
+       "encoding,cook_s,"
        "rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto\n";
   for (const Row& r : rows) {
     const BakeOptions& b = r.setting.bake;
-    const IndirectPreset ip = indirect_preset(b);
+    const GatherPreset gp = gather_preset(b);
     const int samples = b.area_samples > 0               ? b.area_samples
                         : b.quality == Quality::kDraft   ? 4
                         : b.quality == Quality::kPreview ? 16
                                                          : 64;
     s += "\"" + r.setting.name + "\"," + r.setting.knob + "," + quality_name(b.quality) + "," +
-         std::to_string(ip.photons) + "," + std::to_string(ip.virtual_lights) + "," +
-         std::to_string(samples) + "," + std::to_string(r.width) + "," +
-         encoding_name(r.setting.encoding) + "," + number(r.cook_s, "%.4f") + "," +
-         std::to_string(r.rays) + "," + std::to_string(r.pack_bytes) + "," + number(r.m.rel_rmse) +
-         "," + number(r.m.max_rel_error) + "," + number(r.m.psnr_db, "%.3f") + "," +
+         std::to_string(gp.rays) + "," + std::to_string(gp.level) + "," +
+         std::to_string(gp.denoise) + "," + std::to_string(samples) + "," +
+         std::to_string(r.width) + "," + encoding_name(r.setting.encoding) + "," +
+         number(r.cook_s, "%.4f") + "," + std::to_string(r.rays) + "," +
+         std::to_string(r.pack_bytes) + "," + number(r.m.rel_rmse) + "," +
+         number(r.m.max_rel_error) + "," + number(r.m.psnr_db, "%.3f") + "," +
          (r.pareto ? "1" : "0") + "\n";
   }
   return s;
@@ -567,10 +576,9 @@ int verb_accuracy(Args& args) {
   {
     BakeOptions prod;
     prod.quality = Quality::kProduction;
-    const IndirectPreset p = indirect_preset(prod);
+    const GatherPreset p = gather_preset(prod);
     ref_options.quality = Quality::kProduction;
-    ref_options.photons = p.photons * factor;
-    ref_options.virtual_lights = p.virtual_lights * factor;
+    ref_options.gather_rays = p.rays * factor;
     ref_options.area_samples = 64 * factor;
     ref_options.seed = o.seed + kReferenceSeedOffset;
     ref_options.threads = o.threads;
@@ -601,8 +609,7 @@ int verb_accuracy(Args& args) {
       hasher.value(l.semi_dynamic);
     }
     hasher.value(ref_options.quality);
-    hasher.value(ref_options.photons);
-    hasher.value(ref_options.virtual_lights);
+    hasher.value(ref_options.gather_rays);
     hasher.value(ref_options.area_samples);
     hasher.value(ref_options.seed);
   }
@@ -624,8 +631,7 @@ int verb_accuracy(Args& args) {
     progress.message("reference: using the cache " + cache_path);
   } else {
     progress.message("reference: baking (production x" + std::to_string(factor) + ": " +
-                     std::to_string(ref_options.photons) + " photons, " +
-                     std::to_string(ref_options.virtual_lights) + " virtual lights, " +
+                     std::to_string(ref_options.gather_rays) + " gather rays, " +
                      std::to_string(ref_options.area_samples) + " area samples)");
     const auto t = std::chrono::steady_clock::now();
     reference = bake_state(scene, ref_layout.layout, ref_layout.texels, *tracer, StateSpec{},
@@ -800,8 +806,7 @@ int verb_accuracy(Args& args) {
   std::vector<std::string> notes = {
       "lightpatch accuracy " + o.scene_path + (o.quick ? " (--quick)" : ""),
       "reference: bake_state of the authored state, production x" + std::to_string(factor) + " (" +
-          std::to_string(ref_options.photons) + " photons, " +
-          std::to_string(ref_options.virtual_lights) + " virtual lights, " +
+          std::to_string(ref_options.gather_rays) + " gather rays, " +
           std::to_string(ref_options.area_samples) + " area samples, seed " +
           std::to_string(ref_options.seed) + "), " + std::to_string(reference.width) + "x" +
           std::to_string(reference.height) + (cached ? ", from the cache" : ""),

@@ -11,6 +11,7 @@
 
 #include "args.h"
 #include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/cook.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/io.h"
@@ -74,8 +75,6 @@ CookOptions parse_common(Args& args, const char* output_what) {
   if (o.bake.indirect_level != 0 && (o.bake.indirect_level & (o.bake.indirect_level - 1)) != 0)
     throw ArgsError("--indirect-level must be 1, 2, 4 or 8");
   o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
-  o.bake.photons = args.int_option("--photons", 0, 1, 100'000'000);
-  o.bake.virtual_lights = args.int_option("--virtual-lights", 0, 1, 1'000'000);
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
   o.bake.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.bake.threads = args.int_option("--threads", 0, 1, 1024);
@@ -97,55 +96,6 @@ void probe_output_folder(const std::string& path) {
   ::unlink(probe.c_str());
 }
 
-struct Prepared {
-  Scene scene;
-  Layout layout;
-  std::unique_ptr<Tracer> tracer;
-  TexelSet texels;
-};
-
-template <typename F>
-auto timed(Progress& progress, Report& report, const std::string& stage, F&& f) {
-  progress.begin(stage, 1);
-  auto result = f();
-  report.stage_time(stage, progress.end());
-  return result;
-}
-
-Prepared prepare(const CookOptions& o, Progress& progress, Report& report) {
-  Prepared p;
-  p.scene = timed(progress, report, "import", [&] { return import_gltf(o.scene_path, o.import); });
-  p.layout = timed(progress, report, "layout", [&] { return build_layout(p.scene, o.layout); });
-  for (const std::string& note : p.layout.notes) progress.message("note: " + note);
-  p.tracer = timed(progress, report, "trace setup", [&] { return make_embree_tracer(p.scene); });
-  p.texels = timed(progress, report, "texels",
-                   [&] { return build_texels(p.scene, p.layout, p.tracer.get()); });
-
-  size_t valid = 0;
-  for (uint8_t v : p.texels.valid) valid += v ? 1 : 0;
-  int semi_lights = 0;
-  for (const Light& l : p.scene.lights) semi_lights += l.semi_dynamic ? 1 : 0;
-  std::lock_guard<std::mutex> lock(report.mutex());
-  nlohmann::json& s = report.root()["scene"];
-  s["path"] = o.scene_path;
-  s["triangles"] = p.scene.triangle_count();
-  s["meshes"] = p.scene.meshes.size();
-  s["lights"] = p.scene.lights.size();
-  s["semi_dynamic_lights"] = semi_lights;
-  s["objects"] = p.scene.objects.size();
-  s["scale_m"] = p.scene.scale();
-  nlohmann::json& l = report.root()["layout"];
-  l["width"] = p.layout.width;
-  l["height"] = p.layout.height;
-  l["texels_per_unit"] = p.layout.texels_per_unit;
-  l["verbatim_uv1"] = p.layout.verbatim_uv1;
-  l["regions"] = p.layout.regions.size();
-  l["notes"] = p.layout.notes;
-  l["texels"] = p.texels.position.size();
-  l["valid_texels"] = valid;
-  return p;
-}
-
 void finish_report(const CookOptions& o, Report& report, double seconds) {
   if (o.report_path.empty()) return;
   {
@@ -159,44 +109,18 @@ double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-void finalize_maps(BakedMaps& maps, const Prepared& p, Progress& progress, Report& report) {
-  progress.begin("finalize maps", 1 + maps.contribution.size() + maps.shadows.size());
-  finalize_map(maps.base, p.scene, p.layout, p.texels);
-  progress.advance();
-  for (FloatImage& c : maps.contribution) {
-    finalize_map(c, p.scene, p.layout, p.texels);
-    progress.advance();
-  }
-  for (ShadowMap& s : maps.shadows) {
-    finalize_map(s.map, p.scene, p.layout, p.texels);
-    progress.advance();
-  }
-  report.stage_time("finalize", progress.end());
-}
-
-// Bake, finalize and pack once more, the pack not written; returns its bytes.
-std::vector<uint8_t> rebake(const BakeOptions& bake, const Prepared& p, Progress& progress,
-                            Report& report) {
-  BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, bake, progress, report);
-  finalize_maps(maps, p, progress, report);
-  PackOptions po;
-  po.keep_colour = !bake.plan_effects;
-  return timed(progress, report, "pack",
-               [&] { return build_pack(p.scene, p.layout, maps, po, report); });
-}
-
 // Bakes and packs the scene with the plan off (same options and seed), then with the plan again,
 // neither pack written, and adds the comparison to `report` (plan_measure.h). The cook's own bake
 // pays one-time costs (first touch of the tracer's and the maps' memory: about 0.5 s of 8 in the
 // small inn) that would credit the forced run, so both timed runs follow it.
-void measure_plan(const CookOptions& o, const Prepared& p, Progress& progress, Report& report,
+void measure_plan(const CookOptions& o, const PreparedScene& p, Progress& progress, Report& report,
                   const std::vector<uint8_t>& pack) {
   BakeOptions forced = o.bake;
   forced.plan_effects = false;
   Report fr, pr;
   progress.message("measure plan: baking again with everything forced on, then as planned");
-  rebake(forced, p, progress, fr);
-  const std::vector<uint8_t> again = rebake(o.bake, p, progress, pr);
+  cook_pack(p, forced, progress, fr);
+  const std::vector<uint8_t> again = cook_pack(p, o.bake, progress, pr);
   std::lock_guard<std::mutex> lock(report.mutex());
   add_plan_measurement(pr.root(), fr.root());
   // The same decisions in the same order (the bake is deterministic), now with saved times.
@@ -231,13 +155,9 @@ int verb_cook(Args& args) {
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   Progress progress(o.quiet);
   Report report;
-  Prepared p = prepare(o, progress, report);
-  BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, o.bake, progress, report);
-  finalize_maps(maps, p, progress, report);
-  PackOptions po;
-  po.keep_colour = !o.bake.plan_effects;
-  const std::vector<uint8_t> pack = timed(
-      progress, report, "pack", [&] { return build_pack(p.scene, p.layout, maps, po, report); });
+  const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report, o.import);
+  BakedMaps maps;
+  const std::vector<uint8_t> pack = cook_pack(p, o.bake, progress, report, &maps);
   if (const std::string w = default_limits_warning(pack); !w.empty())
     std::fprintf(stderr, "lightpatch cook: warning: %s\n", w.c_str());
   progress.begin("write", 1);
@@ -269,12 +189,8 @@ int verb_bake_state(Args& args) {
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   Progress progress(o.quiet);
   Report report;
-  Prepared p = prepare(o, progress, report);
-  FloatImage map =
-      bake_state(p.scene, p.layout, p.texels, *p.tracer, state, o.bake, progress, report);
-  progress.begin("finalize maps", 1);
-  finalize_map(map, p.scene, p.layout, p.texels);
-  report.stage_time("finalize", progress.end());
+  const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report, o.import);
+  const FloatImage map = cook_state(p, state, o.bake, progress, report);
   progress.begin("write", 1);
   write_pfm(o.output, map);
   report.stage_time("write", progress.end());

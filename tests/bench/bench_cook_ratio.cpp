@@ -1,8 +1,8 @@
 // bench_cook_ratio: bakes the same room twice, once with every light and object static and once
 // with them semi-dynamic (B + every C_l + every interacting S_ol), and prints the time ratio.
 // The paper's figure is slightly above 1x; the goal is 1.1x or less. Times are reported, never
-// checked. Indirect light is on (preview quality: photons, virtual indirect lights, the objects'
-// bounce in every S_ol); a fourth argument "direct" turns it off.
+// checked. Indirect light is on (preview quality: final gathering, the objects' change to the
+// bounce light in every S_ol); a fourth argument "direct" turns it off.
 // Usage: bench_cook_ratio [texels-per-side] [repeats] [wall tessellation, 0 = six slabs] [direct]
 #include <algorithm>
 #include <chrono>

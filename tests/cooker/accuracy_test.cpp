@@ -101,9 +101,10 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
 
   const Csv csv = read_csv(dir.file("acc.csv"));
   EXPECT_FALSE(csv.notes.empty());
-  for (const char* column : {"setting", "knob", "quality", "photons", "virtual_lights",
-                             "area_samples", "lightmap_size", "encoding", "cook_s", "rays",
-                             "pack_bytes", "rel_rmse", "max_rel_error", "psnr_db", "pareto"}) {
+  for (const char* column :
+       {"setting", "knob", "quality", "gather_rays", "indirect_level", "denoise", "area_samples",
+        "lightmap_size", "encoding", "cook_s", "rays", "pack_bytes", "rel_rmse", "max_rel_error",
+        "psnr_db", "pareto"}) {
     EXPECT_NE(std::find(csv.header.begin(), csv.header.end(), column), csv.header.end()) << column;
   }
   // --quick: draft, production, and draft with each fixed encoding.

@@ -152,10 +152,10 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
     EXPECT_NE(help.out.find("usage: lightpatch"), std::string::npos) << help.out;
   }
   const ToolRun cook = expect_success({"cook", "--help"});
-  for (const char* option : {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect",
-                             "--photons", "--virtual-lights", "--area-samples", "--seed",
-                             "--integrator", "--gather-rays", "--indirect-level", "--denoise",
-                             "--threads", "--report", "--quiet", "--no-plan", "--measure-plan"}) {
+  for (const char* option :
+       {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect", "--area-samples",
+        "--seed", "--integrator", "--gather-rays", "--indirect-level", "--denoise", "--threads",
+        "--report", "--quiet", "--no-plan", "--measure-plan"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
 }
@@ -189,18 +189,13 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
                       "--indirect-level", "2", "--denoise", "1", "--seed", "8"},
                      kFast));
   EXPECT_FALSE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("c.lpk")));
-  // The photon integrator keeps its knobs.
-  expect_success(cat({"cook", scene, "-o", dir.file("p.lpk"), "--integrator", "photons",
-                      "--photons", "5000", "--report", dir.file("p.json")},
-                     kFast));
-  EXPECT_EQ(nlohmann::json::parse(read_bytes(dir.file("p.json")))["indirect"]["photons"], 5000);
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--indirect-level", "3"}, kFast),
                  "--indirect-level", "");
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--integrator", "vpl"}, kFast),
                  "integrator", "");
   const std::string out = dir.file("out.lpk");
   write_precious(out);
-  expect_failure(dir, {"cook", scene, "-o", out, "--photons", "0"}, "--photons", out);
+  expect_failure(dir, {"cook", scene, "-o", out, "--gather-rays", "0"}, "--gather-rays", out);
   expect_failure(dir, {"cook", scene, "-o", out, "--threads", "many"}, "--threads", out);
   expect_failure(dir, {"cook", scene, "-o", out, "--seed", "-3"}, "--seed", out);
 }

@@ -2,8 +2,8 @@
 // as the uncompressed scene, within the quantization of positions and light-map UVs. The scene
 // carries its own TEXCOORD_1: Draco reorders vertices and triangles, and the automatic unwrap
 // lays charts out in triangle order, so only a verbatim parameterization gives both files the
-// same texel for the same surface point. Direct light only: the photons' paths depend on triangle
-// order, so indirect light differs by its Monte Carlo noise, not by quantization.
+// same texel for the same surface point. Direct light only: quantized positions move the bounce
+// light's gather rays, so indirect light differs by its Monte Carlo noise, not by quantization.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -41,10 +41,9 @@ BakeOptions draft(bool indirect) {
   BakeOptions o;
   o.quality = Quality::kDraft;
   o.indirect = indirect;
-  // Fewer photons than the draft preset keep the indirect cases fast under ASan; bake_state uses
-  // the same photons, so recomposition stays exact to quantization.
-  o.photons = 6000;
-  o.virtual_lights = 64;
+  // Fewer gather rays than the draft preset keep the indirect cases fast under ASan; bake_state
+  // uses the same rays, so recomposition stays exact to quantization.
+  o.gather_rays = 32;
   return o;
 }
 
@@ -544,10 +543,9 @@ TEST(HardCases, AlbedoNearOneInAClosedRoomCookAndRecompose) {
   s.lights = {test::point_light("lamp", {0.6f, 2.0f, 0.4f}, 5.0f, true),
               test::point_light("fill", {-1.2f, 1.0f, 1.1f}, 1.0f, false)};
   test::finish(s);
-  // Photons bounce about a hundred times at albedo 0.99: fewer of them keep the test fast.
+  // Light bounces hundreds of times at albedo 0.99: fewer rays keep the test fast.
   BakeOptions o = draft(true);
-  o.photons = 1500;
-  o.virtual_lights = 32;
+  o.gather_rays = 16;
   cook(c, 48, o);
   ASSERT_FALSE(HasFatalFailure());
   ASSERT_EQ(c.maps.contribution.size(), 1u);

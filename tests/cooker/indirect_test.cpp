@@ -1,5 +1,5 @@
-// Indirect light with small, fast settings (unit tests, also run under ASan): the kd-tree, energy
-// in a closed box, stability at albedo near 1, lost photons, colour bleeding, and recomposition
+// Indirect light with small, fast settings (unit tests, also run under ASan): energy in a closed
+// box, stability at albedo near 1, an open scene, colour bleeding, and recomposition
 // against bake-state for one object at a time. indirect_quality_test.cpp has the production runs.
 #include <gtest/gtest.h>
 
@@ -9,7 +9,6 @@
 #include <random>
 
 #include "indirect_test_scenes.h"
-#include "kd_tree.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/tracer.h"
 
@@ -17,33 +16,6 @@ namespace lightpatch::cooker {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
-
-TEST(KdTree, TopLevelsAreDistinctAndNearestIsExact) {
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<glm::vec3> pts(1000);
-  for (glm::vec3& p : pts) p = {u(rng), u(rng), u(rng)};
-  const KdTree tree(pts);
-  std::vector<int> top = tree.top_levels(63);
-  ASSERT_EQ(top.size(), 63u);
-  std::sort(top.begin(), top.end());
-  EXPECT_EQ(std::unique(top.begin(), top.end()), top.end());
-  for (int q = 0; q < 200; ++q) {
-    const glm::vec3 p{u(rng), u(rng), u(rng)};
-    auto even = [](int i) { return i % 2 == 0; };
-    int best = -1;
-    float d2 = 1e30f;
-    for (size_t i = 0; i < pts.size(); ++i) {
-      const float d = glm::dot(pts[i] - p, pts[i] - p);
-      if (even(int(i)) && d < d2) {
-        d2 = d;
-        best = int(i);
-      }
-    }
-    EXPECT_EQ(tree.nearest(p, even), best);
-  }
-  EXPECT_EQ(tree.nearest({0, 0, 0}, [](int) { return false; }), -1);
-}
 
 struct FurnaceResult {
   double flux = 0.0;
@@ -89,40 +61,15 @@ TEST(Indirect, FurnaceConservesEnergy) {
   }
 }
 
-// Without the area bias the virtual lights' form factors conserve energy: what is left is photon
-// noise and the texel grid.
-TEST(Indirect, PhotonFurnaceConservesEnergyWithoutBias) {
+TEST(Indirect, AlbedoNearOneStaysFinite) {
   BakeOptions o;
   o.quality = Quality::kDraft;
-  o.integrator = Integrator::kPhotons;
-  o.area_bias = 0.0f;
-  o.photons = 20000;
-  o.virtual_lights = 128;
-  for (bool semi : {false, true}) {
-    const FurnaceResult r = furnace(0.5f, o, 12, semi);
-    const double expected = 4.0 * kPi / (1.0 - 0.5);
-    std::printf("furnace rho 0.5, bias 0, %s: %.4f vs %.4f (%+.2f%%)\n", semi ? "C_l" : "B", r.flux,
-                expected, 100.0 * (r.flux / expected - 1.0));
-    EXPECT_TRUE(r.finite);
-    EXPECT_NEAR(r.flux / expected, 1.0, 0.03);
-  }
-}
-
-TEST(Indirect, AlbedoNearOneStaysFinite) {
-  for (Integrator integrator : {Integrator::kGather, Integrator::kPhotons}) {
-    BakeOptions o;
-    o.quality = Quality::kDraft;
-    o.integrator = integrator;
-    o.photons = 1500;
-    o.virtual_lights = 32;
-    const FurnaceResult r = furnace(0.99f, o, 6);
-    EXPECT_TRUE(r.finite);
-    const double expected = 4.0 * kPi / (1.0 - 0.99);
-    std::printf("furnace rho 0.99 (draft, %s): %.2f vs %.2f\n", integrator_name(integrator), r.flux,
-                expected);
-    EXPECT_GT(r.flux, 0.5 * expected);
-    EXPECT_LT(r.flux, 1.2 * expected);
-  }
+  const FurnaceResult r = furnace(0.99f, o, 6);
+  EXPECT_TRUE(r.finite);
+  const double expected = 4.0 * kPi / (1.0 - 0.99);
+  std::printf("furnace rho 0.99 (draft): %.2f vs %.2f\n", r.flux, expected);
+  EXPECT_GT(r.flux, 0.8 * expected);
+  EXPECT_LT(r.flux, 1.1 * expected);
 }
 
 // A candle inside its closed flame mesh (albedo 1, extras castShadows: false) lights and bounces
@@ -130,8 +77,6 @@ TEST(Indirect, AlbedoNearOneStaysFinite) {
 TEST(Indirect, LightInsideItsOwnFlameMeshIsNotSwallowed) {
   BakeOptions o;
   o.quality = Quality::kDraft;
-  o.photons = 4000;
-  o.virtual_lights = 48;
   const glm::vec3 lamp{0.13f, 0.21f, -0.17f};
   auto bake = [&](int flame) {  // 0: no flame mesh, 1: flame casting no shadows, 2: casting
     Scene s = test::furnace_box(0.5f);
@@ -162,40 +107,35 @@ TEST(Indirect, LightInsideItsOwnFlameMeshIsNotSwallowed) {
   EXPECT_LT(sum_shut, 0.01 * sum_bare);  // a flame that casts shadows would swallow the candle
 }
 
-bool has_decision(Report& report, const std::string& what, bool taken,
-                  const std::string& in_reason) {
+// A decision of `kind` about light (or group) `light`, taken or not.
+bool has_decision(Report& report, const std::string& kind, const std::string& light, bool taken) {
   for (const auto& d : report.root()["decisions"]) {
-    if (d["what"].get<std::string>() == what && d["taken"].get<bool>() == taken &&
-        d["reason"].get<std::string>().find(in_reason) != std::string::npos) {
-      return true;
-    }
+    const std::string l = d.contains("light") ? d["light"].get<std::string>() : "static lights";
+    if (d["kind"] == kind && l == light && d["taken"].get<bool>() == taken) return true;
   }
   return false;
 }
 
-TEST(Indirect, LostPhotonsAreReportedNotLoopedOn) {
+// Light that leaves an open scene bounces nowhere: the groups' bounce light is dropped.
+TEST(Indirect, OpenSceneGetsNoBounce) {
   Scene s;
   test::add_quad(s, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
-  // Two spots above an open floor, shining up: every photon leaves the scene.
+  // Two spots above an open floor, shining up: all their light leaves the scene.
   s.lights = {test::spot_light("sky", {1, 1, 0}, {0, 1, 0}, 10.0f, 0.2f, 0.4f),
               test::spot_light("up", {0, 1, 0}, {0, 1, 0}, 10.0f, 0.2f, 0.4f, true)};
   test::finish(s);
   const TexelSet texels = test::grid_texels(8, 8, {-4, 0, -4}, {8, 0, 0}, {0, 0, 8}, {0, 1, 0});
   auto tracer = make_embree_tracer(s);
   Progress progress(true);
-  for (Integrator integrator : {Integrator::kGather, Integrator::kPhotons}) {
-    BakeOptions o;
-    o.quality = Quality::kDraft;
-    o.integrator = integrator;
-    Report report;
-    const BakedMaps maps =
-        bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
-    const char* why = integrator == Integrator::kPhotons ? "left the scene" : "bounce peak 0";
-    EXPECT_TRUE(has_decision(report, "indirect light: static lights", false, why));
-    EXPECT_TRUE(has_decision(report, "indirect light: up", false, why));
-    ASSERT_EQ(maps.contribution.size(), 1u);
-    EXPECT_EQ(maps.contribution[0].channels, 1);  // no bounce: one channel
-  }
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  Report report;
+  const BakedMaps maps =
+      bake_maps(s, test::bare_layout(8, 8), texels, *tracer, o, progress, report);
+  EXPECT_TRUE(has_decision(report, "group_bounce", "static lights", false));
+  EXPECT_TRUE(has_decision(report, "group_bounce", "up", false));
+  ASSERT_EQ(maps.contribution.size(), 1u);
+  EXPECT_EQ(maps.contribution[0].channels, 1);  // no bounce: one channel
 }
 
 // A red wall and a white wall meeting at a corner on a grey floor; a semi-dynamic spot lights the
@@ -233,7 +173,6 @@ TEST(Indirect, ColourBleedingFollowsTheLight) {
   Report report;
   BakeOptions o;
   o.quality = Quality::kDraft;
-  o.photons = 10000;
   const BakedMaps maps = bake_maps(f.scene, layout, texels, *tracer, o, progress, report);
   ASSERT_EQ(maps.contribution.size(), 1u);
   const FloatImage& c = maps.contribution[0];
@@ -327,8 +266,6 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
   Report report;
   BakeOptions o;
   o.quality = Quality::kDraft;
-  o.photons = 5000;
-  o.virtual_lights = 64;
   const BakedMaps maps = bake_maps(box.scene, layout, f.texels, *tracer, o, progress, report);
   ASSERT_EQ(maps.contribution.size(), 1u);
   ASSERT_EQ(maps.contribution[0].channels, 3);

@@ -43,8 +43,8 @@ scenegen::SceneBuilder open_floor() {
   return b;
 }
 
-const std::vector<std::string> kFast = {"--quality", "draft", "--lightmap-size", "64",
-                                        "--photons", "5000",  "--quiet"};
+const std::vector<std::string> kFast = {"--quality",     "draft", "--lightmap-size", "64",
+                                        "--gather-rays", "32",    "--quiet"};
 
 std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
   a.insert(a.end(), b.begin(), b.end());
@@ -56,9 +56,12 @@ void expect_success(const std::vector<std::string>& args) {
   ASSERT_EQ(r.code, 0) << describe(args, r);
 }
 
-const nlohmann::json* find_decision(const nlohmann::json& report, const std::string& what) {
+// The report's decision of `kind` (bake_plan.h) about `light` and `object` ("" for none).
+const nlohmann::json* find_decision(const nlohmann::json& report, const std::string& kind,
+                                    const std::string& light, const std::string& object = "") {
   for (const nlohmann::json& d : report["decisions"]) {
-    if (d["what"] == what) return &d;
+    if (d["kind"] == kind && d.value("light", "") == light && d.value("object", "") == object)
+      return &d;
   }
   return nullptr;
 }
@@ -80,7 +83,7 @@ TEST(Plan, OpenPlaneGetsNoBounceAndItsFarPairIsCulled) {
   cooker::Progress progress(true);
   BakeOptions o;
   o.quality = cooker::Quality::kDraft;
-  o.photons = 5000;
+  o.gather_rays = 32;
   Report planned_report, forced_report;
   const BakedMaps planned =
       cooker::bake_maps(scene, bare_layout(32, 32), texels, *tracer, o, progress, planned_report);
@@ -89,18 +92,16 @@ TEST(Plan, OpenPlaneGetsNoBounceAndItsFarPairIsCulled) {
       cooker::bake_maps(scene, bare_layout(32, 32), texels, *tracer, o, progress, forced_report);
   const nlohmann::json& pr = planned_report.root();
   const nlohmann::json& fr = forced_report.root();
-  const nlohmann::json* ind = find_decision(pr, "indirect light: lamp");
+  const nlohmann::json* ind = find_decision(pr, "group_bounce", "lamp");
   ASSERT_NE(ind, nullptr);
   EXPECT_FALSE((*ind)["taken"].get<bool>());
-  EXPECT_NE((*ind)["reason"].get<std::string>().find("below half an output step"),
-            std::string::npos)
-      << (*ind)["reason"];
-  ASSERT_NE(find_decision(fr, "indirect light: lamp"), nullptr);
-  EXPECT_TRUE((*find_decision(fr, "indirect light: lamp"))["taken"].get<bool>());
-  const nlohmann::json* pair = find_decision(pr, "pair lamp / cellar_box");
+  EXPECT_LT((*ind)["value"].get<double>(), (*ind)["bound"].get<double>()) << (*ind)["reason"];
+  ASSERT_NE(find_decision(fr, "group_bounce", "lamp"), nullptr);
+  EXPECT_TRUE((*find_decision(fr, "group_bounce", "lamp"))["taken"].get<bool>());
+  const nlohmann::json* pair = find_decision(pr, "pair", "lamp", "cellar_box");
   ASSERT_NE(pair, nullptr);
   EXPECT_FALSE((*pair)["taken"].get<bool>());
-  EXPECT_NE((*pair)["reason"].get<std::string>().find("reach"), std::string::npos);
+  EXPECT_EQ((*pair)["stage"], "plan") << "culled before tracing: " << (*pair)["reason"];
   EXPECT_TRUE(planned.shadows.empty());
   ASSERT_EQ(forced.shadows.size(), 1u);
   EXPECT_EQ(fr["pairs_skipped"].get<int>(), 0);
@@ -145,16 +146,14 @@ TEST(Plan, ForcedDirectCookTracesThePairThePlanCulls) {
                      direct));
   const nlohmann::json planned = load(dir.file("planned.json"));
   const nlohmann::json forced = load(dir.file("forced.json"));
-  const nlohmann::json* far_planned = find_decision(planned, "pair lamp / far_crate");
-  const nlohmann::json* far_forced = find_decision(forced, "pair lamp / far_crate");
+  const nlohmann::json* far_planned = find_decision(planned, "pair", "lamp", "far_crate");
+  const nlohmann::json* far_forced = find_decision(forced, "pair", "lamp", "far_crate");
   ASSERT_NE(far_planned, nullptr);
   ASSERT_NE(far_forced, nullptr);
   EXPECT_FALSE((*far_planned)["taken"].get<bool>());
-  EXPECT_NE((*far_planned)["reason"].get<std::string>().find("outside the light's reach"),
-            std::string::npos)
-      << (*far_planned)["reason"];
+  EXPECT_EQ((*far_planned)["stage"], "plan") << (*far_planned)["reason"];
   EXPECT_TRUE((*far_forced)["taken"].get<bool>());
-  EXPECT_EQ((*far_forced)["reason"], "forced on (--no-plan)");
+  EXPECT_TRUE((*far_forced)["forced"].get<bool>());
   // Culled, the pair costs no ray; forced, the pass also asks which objects each ray crosses.
   EXPECT_GE(forced["bake"]["rays"].get<double>(), planned["bake"]["rays"].get<double>());
   EXPECT_GE(forced["pack"]["groups"].get<int>(), planned["pack"]["groups"].get<int>());
@@ -190,35 +189,36 @@ TEST(Plan, ForcedCookKeepsWhatThePlanSkipsAndRecomposesTheSameStates) {
   EXPECT_EQ(load(dir.file("state.json"))["bake"]["plan_effects"], false);
   EXPECT_EQ(cooker::read_pfm(dir.file("state.pfm")).width, 64);
 
-  // The far crate: with indirect light every object is a candidate (it could block bounce), so
-  // the plan traces its pair and drops it for its peak; forced, the pair is kept.
-  const nlohmann::json* far_planned = find_decision(planned, "pair lamp / far_crate");
-  const nlohmann::json* far_forced = find_decision(forced, "pair lamp / far_crate");
+  // The far crate: out of the lamp's direct reach, it may still change the lamp's bounce light;
+  // the plan drops its pair (for its peak, or its bounce change's first bounce); forced, the pair
+  // is kept.
+  const nlohmann::json* far_planned = find_decision(planned, "pair", "lamp", "far_crate");
+  const nlohmann::json* far_forced = find_decision(forced, "pair", "lamp", "far_crate");
   ASSERT_NE(far_planned, nullptr);
   ASSERT_NE(far_forced, nullptr);
   EXPECT_FALSE((*far_planned)["taken"].get<bool>());
   EXPECT_FALSE((*far_planned)["reason"].get<std::string>().empty());
   EXPECT_TRUE((*far_forced)["taken"].get<bool>());
-  EXPECT_EQ((*far_forced)["reason"], "forced on (--no-plan)");
+  EXPECT_TRUE((*far_forced)["forced"].get<bool>());
   EXPECT_LT(planned["pairs_kept"].get<int>(), forced["pairs_kept"].get<int>());
   EXPECT_EQ(forced["pairs_skipped"].get<int>(), 0);
 
-  // Indirect light: the lamp's photons emit power, so forcing turns its group on with every
-  // object's bounce traced; the plan decides from the energy the bounce carries.
-  const nlohmann::json* ind_forced = find_decision(forced, "indirect light: lamp");
+  // Indirect light: forcing keeps the lamp's bounce light with every object's change to it; the
+  // plan decides from the bounce light's peak.
+  const nlohmann::json* ind_forced = find_decision(forced, "group_bounce", "lamp");
   ASSERT_NE(ind_forced, nullptr);
   EXPECT_TRUE((*ind_forced)["taken"].get<bool>());
-  const nlohmann::json* ind_planned = find_decision(planned, "indirect light: lamp");
+  const nlohmann::json* ind_planned = find_decision(planned, "group_bounce", "lamp");
   ASSERT_NE(ind_planned, nullptr);
   EXPECT_FALSE((*ind_planned)["reason"].get<std::string>().empty());
-  const nlohmann::json* bounce_far = find_decision(forced, "indirect bounce: lamp / far_crate");
+  const nlohmann::json* bounce_far = find_decision(forced, "object_bounce", "lamp", "far_crate");
   ASSERT_NE(bounce_far, nullptr);
   EXPECT_TRUE((*bounce_far)["taken"].get<bool>());
   // A point light has no size: nothing to force.
-  const nlohmann::json* soft = find_decision(forced, "soft shadows: lamp");
+  const nlohmann::json* soft = find_decision(forced, "soft_shadows", "lamp");
   ASSERT_NE(soft, nullptr);
   EXPECT_FALSE((*soft)["taken"].get<bool>());
-  EXPECT_NE((*soft)["reason"].get<std::string>().find("nothing to force"), std::string::npos);
+  EXPECT_FALSE((*soft)["forced"].get<bool>());
   // Colour: forced keeps every 3-channel patch at 3 channels.
   EXPECT_EQ(forced["pack"]["colour"]["patches_1_channel_from_3"], 0);
   EXPECT_GE(forced["pack"]["patches"].get<int>(), planned["pack"]["patches"].get<int>());
@@ -268,7 +268,7 @@ TEST(Plan, MeasurePlanReportsTimesBytesAndCountsOfBothRuns) {
   const std::vector<std::string> args =
       cat({"cook", dir.file("floor.glb"), "-o", dir.file("floor.lpk"), "--measure-plan", "--report",
            dir.file("report.json")},
-          {"--quality", "draft", "--lightmap-size", "64", "--photons", "5000"});
+          {"--quality", "draft", "--lightmap-size", "64", "--gather-rays", "32"});
   const ToolRun r = run_tool(args);
   ASSERT_EQ(r.code, 0) << describe(args, r);
   EXPECT_NE(r.err.find("plan: saved"), std::string::npos) << r.err;

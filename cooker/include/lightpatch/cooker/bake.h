@@ -1,9 +1,11 @@
 // The baker: direct and indirect (bounce) light into the base, contribution and shadow maps, and
-// single scene states for reference.
+// single scene states for reference. A bake is a set of light groups (bake_plan.h), each a unit of
+// work with deterministic inputs and outputs: BakeSession plans them and traces what they share
+// once, bake_group() bakes one, assemble() puts them together.
 #pragma once
 
 #include <cstdint>
-#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,49 +24,34 @@ enum class Quality { kDraft, kPreview, kProduction };
 const char* quality_name(Quality q);
 Quality parse_quality(const std::string& name);  // throws CookError
 
-// How bounce light is computed. kGather (default): final gathering on coarse texels with the
-// light map as radiance cache, multiple bounces by iteration, a geometry-guided denoiser
-// (gather.h). kPhotons: photons merged into virtual indirect lights (seed 004).
-enum class Integrator { kGather, kPhotons };
+// How bounce light is computed. kGather: final gathering on coarse texels with the light map as
+// radiance cache, multiple bounces by iteration and a geometry-guided denoiser (the cook's
+// integrator; src/indirect/gather.h).
+enum class Integrator { kGather };
 const char* integrator_name(Integrator i);
 Integrator parse_integrator(const std::string& name);  // throws CookError
 
 struct BakeOptions {
   Quality quality = Quality::kPreview;
-  int area_samples =
-      0;            // samples per texel for lights with a radius / emissive surfaces; 0 = preset
+  // Samples per texel for lights with a radius and emissive surfaces; 0 = the preset (draft 4,
+  // preview 16, production 64).
+  int area_samples = 0;
   int threads = 0;  // 0 = all cores
   uint64_t seed = 1;
-  // Indirect light (photons -> virtual indirect lights, seed 004). Presets per quality:
-  //   draft 30k photons / 192 VPLs / bias 1, preview 120k / 512 / 1, production 500k / 2048 / 0.5.
-  // Bias 1 with A the disc the merged photons cover gives a disc emitter's exact on-axis
-  // irradiance, Phi / (pi r^2 + A); it darkens receivers within ~sqrt(bias A / pi) of a VPL
-  // (near corners), so more, smaller VPLs lose less energy.
   bool indirect = true;
   Integrator integrator = Integrator::kGather;
   // Final gathering, per preset: draft level 4 / 64 rays / 2 denoise passes, preview 2 / 256 / 2,
-  // production 2 / 1024 / 1 (at most 3 passes: steps of 1, 2 and 4 coarse texels). The level is the
-  // coarse texel size (1, 2, 4 or 8 light-map texels per axis) at which bounce light is computed.
-  int gather_rays = 0;      // rays per coarse texel; 0 = preset
-  int indirect_level = 0;   // 1, 2, 4 or 8; 0 = preset
-  int denoise = -1;         // a-trous passes, 0..3; < 0 = preset
-  int photons = 0;          // photons emitted for the whole scene (split by power); 0 = preset
-  int virtual_lights = 0;   // virtual indirect lights for the whole scene; 0 = preset
-  float area_bias = -1.0f;  // cosA cosB / (pi r^2 + bias A); < 0 = preset
+  // production 2 / 1024 / 1. The level is the size (texels per axis, 1, 2, 4 or 8) of the coarse
+  // texels on which bounce light is computed; denoise passes step 1, 2 and 4 coarse texels.
+  int gather_rays = 0;     // rays per coarse texel; 0 = preset
+  int indirect_level = 0;  // 1, 2, 4 or 8; 0 = preset
+  int denoise = -1;        // a-trous passes, 0..3; < 0 = preset
   // The effect plan (DESIGN.md, "Only what the scene calls for"). false forces everything on, to
-  // measure what the plan saves: indirect light for every light group that emits photons with
-  // every object's bounce traced, every light-object pair traced and kept (no reach or cone
-  // culling, no peak threshold), every measured overlap correction kept.
+  // measure what the plan saves: bounce light for every light group, every object's change to it
+  // solved, every light-object pair traced and kept (no reach or cone culling, no peak
+  // threshold), every measured overlap correction kept.
   bool plan_effects = true;
 };
-
-// The preset's photons, virtual lights and area bias (after applying any overrides in `options`).
-struct IndirectPreset {
-  int photons = 0;
-  int virtual_lights = 0;
-  float area_bias = 0.0f;
-};
-IndirectPreset indirect_preset(const BakeOptions& options);
 
 // The final-gathering preset after overrides.
 struct GatherPreset {
@@ -74,19 +61,55 @@ struct GatherPreset {
 };
 GatherPreset gather_preset(const BakeOptions& options);
 
-// Bakes B, every C_l and every interacting S_ol. With indirect light, C_l and S_ol have 3 channels
-// (bounce is tinted by the albedos it met; the pack builder stores 1 where the tint is below the
-// output step), S_ol may be negative (bounce the object adds). Effect, light and pair decisions
-// go into `report`.
+struct BakePlan;
+struct Decision;
+
+// One light group's maps (BakePlan::groups[group]): the unit of work of a bake.
+struct GroupBake {
+  size_t group = 0;
+  FloatImage map;                                   // B (group 0) or C_l
+  std::vector<ShadowMap> shadows;                   // a light group's kept S_ol
+  std::vector<PairCorrectionMap> pair_corrections;  // a light group's kept corrections
+  std::vector<StaticShadowMap> static_shadows;      // group 0's kept static shadows
+  std::vector<Decision> decisions;                  // made while baking the group
+  double seconds = 0.0;
+};
+
+class BakeSession {
+ public:
+  // Plans the bake and traces what its groups share (the gather rays). Decisions of the plan go
+  // into `report`. Throws CookError on inconsistent input.
+  BakeSession(const Scene& scene, const Layout& layout, const TexelSet& texels,
+              const Tracer& tracer, const BakeOptions& options, Progress& progress, Report& report);
+  ~BakeSession();
+  BakeSession(const BakeSession&) = delete;
+  BakeSession& operator=(const BakeSession&) = delete;
+
+  const BakePlan& plan() const;
+  float output_step() const;
+  // Bakes group `group` of plan().groups. Its maps depend on the scene, options and seed only.
+  GroupBake bake_group(size_t group, Progress& progress, Report& report) const;
+  // The groups' maps as one BakedMaps, in plan order (every group exactly once).
+  BakedMaps assemble(std::vector<GroupBake> groups, Report& report) const;
+  // One state baked directly (3 channels): every light at its state, the visible objects
+  // present, their bounce light included.
+  FloatImage bake_state(const StateSpec& state, Progress& progress, Report& report) const;
+
+  struct Impl;  // the session's state (src/bake/session.h)
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// Bakes B, every C_l and every interacting S_ol (all groups of one session). With indirect light,
+// C_l and S_ol have 3 channels (bounce is tinted by the albedos it met; the pack builder stores 1
+// where the tint is below the output step), S_ol may be negative (bounce the object adds).
 BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& texels,
                     const Tracer& tracer, const BakeOptions& options, Progress& progress,
                     Report& report);
 
-// Bakes one state directly, as a conventional light mapper would: all lights at their state
-// (static ones as authored), visible objects present, bounce light through them (the same
-// photons as bake_maps, so a single-object state equals B + sum f_l (C_l - S_ol) to rounding).
-// 3 channels. Throws CookError on names
-// in `state` that the scene does not have.
+// Bakes one state directly, as a conventional light mapper would (BakeSession::bake_state).
+// Throws CookError on names in `state` that the scene does not have.
 FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& texels,
                       const Tracer& tracer, const StateSpec& state, const BakeOptions& options,
                       Progress& progress, Report& report);

@@ -1,4 +1,4 @@
-#include "indirect_solve.h"
+#include "indirect/solve.h"
 
 #include <algorithm>
 #include <cmath>
@@ -59,11 +59,14 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
 }
 
 // out[c] = mean over c's rays of src at what the ray hits with `present` objects in place, for
-// every receiver c (others untouched: the caller zeroes `out`).
+// every receiver c (others untouched: the caller zeroes `out`). `later`: a bounce after the
+// first, which reads only the first rays_after_first rays.
 void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
                  const CoarseMap& src, const std::vector<uint32_t>& receivers, int threads,
-                 CoarseMap& out) {
+                 bool later, CoarseMap& out) {
   const bool objects = !present.empty();
+  const int n = later ? op.rays_after_first : op.rays;
+  const std::vector<float>& weight = later ? op.weight_after_first : op.weight;
   const int items = int((receivers.size() + kChunk - 1) / kChunk);
   parallel_for(items, threads, [&](int item) {
     const size_t end = std::min(receivers.size(), size_t(item + 1) * kChunk);
@@ -71,17 +74,18 @@ void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
       const uint32_t c = receivers[i];
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       glm::vec3 sum(0.0f);
-      for (int k = 0; k < op.rays; ++k)
+      for (int k = 0; k < n; ++k)
         if (hits[k] != kNoTexel) sum += src[hits[k]];
       if (objects) {
         for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
           const Crossing& rec = op.crossings[r];
+          if (int(rec.ray) >= n) break;  // crossings are in ray order
           uint32_t oc = kNoTexel;
           if (!present_hit(op, rec, present, &oc)) continue;
           sum += at(src, oc) - at(src, hits[rec.ray]);
         }
       }
-      out[c] = sum * op.weight[c];
+      out[c] = sum * weight[c];
     }
   });
 }
@@ -98,6 +102,24 @@ bool prune(CoarseMap& delta, float tolerance) {
   return any;
 }
 
+// For receiver c, what its rays that now end on a present object no longer see (the static hit's
+// radiance) against what they see instead, as the series' first bounce and its later bounces
+// read them: the direct radiance through every ray, the bounce radiance through the prefix of
+// rays the later bounces use (so the change equals I(none) - I(present) of the same series).
+glm::vec3 crossing_change(const GatherOperator& op, const std::vector<uint8_t>& present,
+                          const EmptyRadiance& empty, uint32_t c) {
+  glm::vec3 first(0.0f), later(0.0f);
+  for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
+    const Crossing& rec = op.crossings[r];
+    uint32_t oc = kNoTexel;
+    if (!present_hit(op, rec, present, &oc)) continue;
+    const uint32_t h = op.hit[size_t(c) * size_t(op.rays) + rec.ray];
+    first += at(empty.direct, h) - at(empty.direct, oc);
+    if (int(rec.ray) < op.rays_after_first) later += at(empty.bounce, h) - at(empty.bounce, oc);
+  }
+  return first * op.weight[c] + later * op.weight_after_first[c];
+}
+
 // Continues a Neumann series whose first term is `delta`: adds every bounce to `sum`.
 void bounce_on(const GatherOperator& op, const std::vector<uint8_t>& present, CoarseMap delta,
                const SolveOptions& options, SolveStats* stats, CoarseMap& sum) {
@@ -110,8 +132,8 @@ void bounce_on(const GatherOperator& op, const std::vector<uint8_t>& present, Co
     for (size_t c = 0; c < delta.size(); ++c) delta[c] *= g.albedo[c];
     const std::vector<uint32_t> receivers = receivers_of(op, delta, none);
     CoarseMap next(delta.size(), glm::vec3(0.0f));
-    gather_into(op, present, delta, receivers, options.threads, next);
-    if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
+    gather_into(op, present, delta, receivers, options.threads, true, next);
+    if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays_after_first);
     delta.swap(next);
   }
 }
@@ -132,14 +154,14 @@ CoarseMap solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& p
   const std::vector<uint32_t> none;
   const std::vector<uint32_t> receivers = receivers_of(op, source, none);
   CoarseMap first(source.size(), glm::vec3(0.0f));
-  gather_into(op, present, source, receivers, options.threads, first);
+  gather_into(op, present, source, receivers, options.threads, false, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
   bounce_on(op, present, std::move(first), options, stats, sum);
   return sum;
 }
 
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
-                       const CoarseMap& empty_total, const CoarseMap& direct_change,
+                       const EmptyRadiance& empty, const CoarseMap& direct_change,
                        const SolveOptions& options, SolveStats* stats) {
   const size_t nc = op.grid.size();
   // Receivers with a ray that now ends on a present object.
@@ -154,47 +176,28 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
   // radiance those rays no longer see (the static hit's) against what they see instead.
   CoarseMap first(nc, glm::vec3(0.0f));
   const std::vector<uint32_t> receivers = receivers_of(op, direct_change, crossing);
-  gather_into(op, present, direct_change, receivers, options.threads, first);
+  gather_into(op, present, direct_change, receivers, options.threads, false, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  for (uint32_t c : crossing) {
-    glm::vec3 sum(0.0f);
-    for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
-      const Crossing& rec = op.crossings[r];
-      uint32_t oc = kNoTexel;
-      if (!present_hit(op, rec, present, &oc)) continue;
-      sum += at(empty_total, op.hit[size_t(c) * size_t(op.rays) + rec.ray]) - at(empty_total, oc);
-    }
-    first[c] += sum * op.weight[c];
-  }
+  for (uint32_t c : crossing) first[c] += crossing_change(op, present, empty, c);
   CoarseMap change(nc, glm::vec3(0.0f));
   bounce_on(op, present, std::move(first), options, stats, change);
   return change;
 }
 
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
-                        const CoarseMap& empty_total) {
+                        const EmptyRadiance& empty) {
   float best = 0.0f;
   std::vector<uint32_t> receivers;
   for (size_t o = 0; o < present.size(); ++o)
     if (present[o])
       receivers.insert(receivers.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
-  for (uint32_t c : receivers) {
-    glm::vec3 sum(0.0f);
-    for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
-      const Crossing& rec = op.crossings[r];
-      uint32_t oc = kNoTexel;
-      if (!present_hit(op, rec, present, &oc)) continue;
-      sum += at(empty_total, op.hit[size_t(c) * size_t(op.rays) + rec.ray]) - at(empty_total, oc);
-    }
-    best = std::max(best, max3(sum * op.weight[c]));
-  }
+  for (uint32_t c : receivers) best = std::max(best, max3(crossing_change(op, present, empty, c)));
   return best;
 }
 
-CoarseMap total_radiance(const GatherOperator& op, const CoarseMap& source,
-                         const CoarseMap& indirect) {
-  CoarseMap out(source.size());
-  for (size_t c = 0; c < out.size(); ++c) out[c] = source[c] + op.grid.albedo[c] * indirect[c];
+CoarseMap bounce_radiance(const GatherOperator& op, const CoarseMap& indirect) {
+  CoarseMap out(indirect.size());
+  for (size_t c = 0; c < out.size(); ++c) out[c] = op.grid.albedo[c] * indirect[c];
   return out;
 }
 

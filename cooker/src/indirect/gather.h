@@ -96,6 +96,11 @@ struct GatherOperator {
   std::vector<uint32_t> hit;
   // 1 / the rays each coarse texel keeps (those of buried members are dropped); 0 if none.
   std::vector<float> weight;
+  // Bounces after the first read only each texel's first `rays_after_first` rays (a prefix of a
+  // low-discrepancy sequence, as well spread as the whole): their light is smoother and dimmer,
+  // and this is where most of a solve's reads go. weight_after_first as `weight` for the prefix.
+  int rays_after_first = 0;
+  std::vector<float> weight_after_first;
   size_t buried_texels = 0;
   // Mean albedo (largest channel) over the texels that gather, at most 0.995: how slowly the
   // bounce series converges.

@@ -1,4 +1,4 @@
-#include "gather.h"
+#include "indirect/gather.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,6 +25,8 @@ constexpr int kMaxCrossed = 8;
 constexpr float kBuriedFraction = 0.1f;
 // Marks a ray's hit on the back of a surface while the rays are traced.
 constexpr uint32_t kBackFace = 0xFFFFFFFEu;
+// The fewest rays a coarse texel gathers with after the first bounce.
+constexpr int kMinRaysAfterFirst = 16;
 
 // Union-find over fine texels: charts are the connected valid texels of one region.
 struct Charts {
@@ -326,24 +328,33 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
     std::vector<CrossingHit>& ch = row_hits[size_t(by)];
     std::vector<uint32_t>& counts = row_counts[size_t(by)];
+    std::vector<Ray> rays(static_cast<size_t>(n_rays));
+    std::vector<Hit> first(static_cast<size_t>(n_rays));
     for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
       const uint64_t hsh = sample_hash(options.seed, c, 0x6761746865ull, 0);
       const double o1 = hash_to_unit(hsh), o2 = hash_to_unit(sample_hash(hsh, 1, 2, 3));
       uint32_t crossings_here = 0;
+      // One texel's rays leave a few nearby points: coherent, so they are traced as packets.
       for (int k = 0; k < n_rays; ++k) {
         const uint32_t t = g.members[m0 + uint32_t(k) % mc];
         double u = o1 + kA1 * double(k + 1), v = o2 + kA2 * double(k + 1);
         u -= std::floor(u);
         v -= std::floor(v);
         const glm::vec3 n = texels.normal[t];
-        const glm::vec3 dir = cosine_dir(n, float(u), float(v));
-        const glm::vec3 origin = texels.position[t] + n * eps;
+        rays[size_t(k)] = {texels.position[t] + n * eps, eps, cosine_dir(n, float(u), float(v)),
+                           extent};
+      }
+      tracer.intersect_many(rays.data(), n_rays, first.data(), true);
+      for (int k = 0; k < n_rays; ++k) {
+        const glm::vec3 origin = rays[size_t(k)].origin, dir = rays[size_t(k)].dir;
         float tmin = eps;
         Crossing rec{uint32_t(k), uint32_t(ch.size()), 0};
         uint32_t static_hit = kNoTexel;
         for (int guard = 0; guard <= kMaxCrossed * 2; ++guard) {
-          const Hit h = tracer.intersect(origin, dir, tmin, extent, true);
+          // The first hit from the packet; after an object, the rest of the ray one at a time.
+          const Hit h =
+              guard == 0 ? first[size_t(k)] : tracer.intersect(origin, dir, tmin, extent, true);
           if (!h.hit) break;
           const int object = scene.meshes[size_t(h.mesh)].object;
           if (object < 0) {
@@ -407,6 +418,8 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     return best == kNoTexel ? kNoTexel : g.coarse_of[best];
   };
   op.weight.assign(nc, 0.0f);
+  op.rays_after_first = std::min(n_rays, std::max(kMinRaysAfterFirst, n_rays / 4));
+  op.weight_after_first.assign(nc, 0.0f);
   op.grid.alive.assign(nc, 0);
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
@@ -414,13 +427,15 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     size_t next = 0;
     for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
-      uint32_t used = 0;
+      uint32_t used = 0, used_prefix = 0;
       uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
       for (int k = 0; k < n_rays; ++k) {
         const bool drop = buried[g.members[m0 + uint32_t(k) % mc]] != 0;
         hits[k] = drop ? kNoTexel : resolve(hits[k]);
         used += drop ? 0 : 1;
+        if (k < op.rays_after_first) used_prefix += drop ? 0 : 1;
       }
+      op.weight_after_first[c] = used_prefix > 0 ? 1.0f / float(used_prefix) : 0.0f;
       const uint32_t count = row_counts[size_t(by)][c - row_first[size_t(by)]];
       for (size_t i = next; i < next + count; ++i) {
         const bool drop = buried[g.members[m0 + cr[i].ray % mc]] != 0;

@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "gather.h"
+#include "indirect/gather.h"
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/texels.h"
 
@@ -58,23 +58,29 @@ CoarseMap solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& p
                          const CoarseMap& source, const SolveOptions& options,
                          SolveStats* stats = nullptr);
 
-// What the objects `present` change in a group's indirect light: I_empty - I_present, given the
-// group's radiance with no object present (`empty_total` = source + albedo * I_empty) and the
-// radiance source of the direct light the objects block (`direct_change`, from the fine change
-// D_empty - D_present). Only the receivers that can see a change are visited.
+// What a group sends on with no object present: its direct light's radiance source and its bounce
+// light's (albedo * I).
+struct EmptyRadiance {
+  CoarseMap direct;
+  CoarseMap bounce;
+};
+
+// albedo * indirect: the radiance a group's bounce light sends on.
+CoarseMap bounce_radiance(const GatherOperator& op, const CoarseMap& indirect);
+
+// What the objects `present` change in a group's indirect light, I(none) - I(present), given what
+// the group sends on with no object present and the radiance source of the direct light the
+// objects block (`direct_change`, from the fine change D(none) - D(present)). Only the receivers
+// that can see a change are visited.
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
-                       const CoarseMap& empty_total, const CoarseMap& direct_change,
+                       const EmptyRadiance& empty, const CoarseMap& direct_change,
                        const SolveOptions& options, SolveStats* stats = nullptr);
 
 // The largest first-bounce change that objects `present` make where they block no direct light:
-// per receiver, the mean over its rays that now end on them of what those rays saw before
-// against what they see now. A cheap bound on whether solve_change() is worth running.
+// per receiver, what its rays that now end on them saw before against what they see now. A cheap
+// bound on whether solve_change() is worth running.
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
-                        const CoarseMap& empty_total);
-
-// albedo * map + source (the radiance a solved group sends on).
-CoarseMap total_radiance(const GatherOperator& op, const CoarseMap& source,
-                         const CoarseMap& indirect);
+                        const EmptyRadiance& empty);
 
 // Edge-avoiding a-trous filter over `levels` passes (steps 1, 2, 4, ... blocks), weights from the
 // coarse texels' charts, normals and planes only (never from values): linear, so it commutes

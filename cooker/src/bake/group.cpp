@@ -1,0 +1,244 @@
+#include "bake/group.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "bake/direct_pass.h"
+#include "bake/plan.h"
+#include "indirect/integrator.h"
+#include "worker_pool.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+// A map is kept when its peak exceeds this fraction of its group's significance threshold (half
+// an 8-bit step at the authored exposure): below, it would round away.
+constexpr float kKeepFraction = 0.5f;
+// A bounce-only object is solved when the first bounce of its change could reach this fraction
+// of half an output step; the solved change is then kept or dropped by its own peak.
+constexpr float kBounceOnlyFraction = 0.5f;
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// The first channel of a map whose three are equal (a light's grey transport).
+FloatImage first_channel(const FloatImage& m) {
+  if (m.channels == 1) return m;
+  FloatImage out(m.width, m.height, 1);
+  for (size_t i = 0; i < out.data.size(); ++i) out.data[i] = m.data[i * size_t(m.channels)];
+  return out;
+}
+
+std::string keep_reason(float peak, float keep_at, const std::string& what) {
+  if (peak > keep_at)
+    return what + " peak " + std::to_string(peak) + " above half an output step (" +
+           std::to_string(keep_at) + ")";
+  if (peak > 0.0f)
+    return what + " peak " + std::to_string(peak) + " below half an output step (" +
+           std::to_string(keep_at) + ")";
+  return "changes none of the group's light at any texel";
+}
+
+}  // namespace
+
+GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t group,
+                           Progress& progress, Report& report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const LightGroup& lg = plan.groups.at(group);
+  const Scene& scene = b.scene;
+  const TexelSet& texels = b.texels;
+  const bool planned = b.options.plan_effects;
+  const bool is_static = lg.light < 0;
+  const IndirectIntegrator* ind = b.indirect.get();
+  const int w = texels.width, h = texels.height;
+  GroupBake out;
+  out.group = group;
+  auto decide = [&](DecisionKind kind, DecisionStage stage, int object, int object_b, bool taken,
+                    std::string reason, double value = std::nan(""), double bound = std::nan(""),
+                    double seconds = std::nan("")) {
+    Decision d;
+    d.kind = kind;
+    d.stage = stage;
+    d.light = lg.light;
+    d.object = object;
+    d.object_b = object_b;
+    d.taken = taken;
+    d.forced = !planned;
+    d.reason = planned ? std::move(reason) : std::string(kForced) + ": " + reason;
+    d.value = value;
+    d.bound = bound;
+    d.seconds = seconds;
+    out.decisions.push_back(std::move(d));
+  };
+
+  Candidates cand(scene.objects.size());
+  for (int o : lg.candidates) cand.add(o);
+  const int channels = is_static || ind ? 3 : 1;
+  progress.begin(is_static ? "base map" : "light " + lg.name, static_cast<uint64_t>(h));
+  DirectPass dp = trace_direct(b, lg.light, cand, channels, progress);
+  report.stage_time(is_static ? "bake.base" : "bake.contribution", progress.end());
+
+  // Bounce light: the group's own, then every object's change to it.
+  GroupBounce gb;
+  bool bounce = false;
+  std::vector<BounceMap> change(cand.sets.size()), only(lg.bounce_only.size());
+  std::vector<std::string> only_reason(lg.bounce_only.size(), "the group's bounce light is off");
+  if (ind) {
+    const auto tb = std::chrono::steady_clock::now();
+    gb = ind->prepare(dp.map, lg.threshold);
+    const float at = 0.5f * lg.threshold;
+    bounce = !planned || gb.peak >= at;
+    decide(DecisionKind::kGroupBounce, DecisionStage::kTraced, -1, -1, bounce,
+           "bounce peak " + std::to_string(gb.peak) + (gb.peak >= at ? " above" : " below") +
+               " half an output step (" + std::to_string(at) + "); " + std::to_string(gb.bounces) +
+               " bounces",
+           gb.peak, at, seconds_since(tb));
+    if (bounce) {
+      const size_t jobs = cand.sets.size() + lg.bounce_only.size();
+      std::vector<double> seconds(jobs, 0.0);
+      progress.begin("bounce of objects: " + lg.name, jobs);
+      parallel_for(int(jobs), b.threads, [&](int j) {
+        const auto tj = std::chrono::steady_clock::now();
+        std::vector<uint8_t> present(scene.objects.size(), 0);
+        if (size_t(j) < cand.sets.size()) {
+          for (int o : cand.sets[size_t(j)]) present[size_t(o)] = 1;
+          FineSum blocked;
+          blocked.sparse.push_back({&dp.shadow[size_t(j)], 1.0f});
+          change[size_t(j)] = ind->change(gb, present, blocked, lg.threshold);
+        } else {
+          const size_t q = size_t(j) - cand.sets.size();
+          present[size_t(lg.bounce_only[q])] = 1;
+          const float first = ind->first_change(gb, present);
+          const float bar = kBounceOnlyFraction * at;
+          if (planned && first < bar) {
+            only_reason[q] = "first bounce of its change " + std::to_string(first) +
+                             " below a quarter output step (" + std::to_string(bar) + ")";
+          } else {
+            only_reason[q] = "first bounce of its change " + std::to_string(first);
+            only[q] = ind->change(gb, present, FineSum{}, lg.threshold);
+          }
+        }
+        seconds[size_t(j)] = seconds_since(tj);
+        progress.advance();
+      });
+      progress.end();
+      for (size_t j = 0; j < cand.sets.size(); ++j)
+        decide(DecisionKind::kObjectBounce, DecisionStage::kTraced, cand.objects[j], -1, true,
+               "blocks direct light: its change to the bounce light is solved", std::nan(""),
+               std::nan(""), seconds[j]);
+      for (size_t q = 0; q < lg.bounce_only.size(); ++q)
+        decide(DecisionKind::kObjectBounce, DecisionStage::kBounce, lg.bounce_only[q], -1,
+               !only[q].empty(), only_reason[q], std::nan(""), std::nan(""),
+               seconds[cand.sets.size() + q]);
+      ind->add(gb.indirect, dp.map);
+    }
+    report.stage_time(is_static ? "bake.base_bounce" : "bake.contribution_bounce",
+                      seconds_since(tb));
+  }
+  // Without bounce light a light's transport is grey: one channel.
+  const bool grey = !is_static && !bounce;
+  out.map = grey ? first_channel(dp.map) : std::move(dp.map);
+
+  // Each slot's map: its direct shadow and its bounce change; kept above half a step.
+  const float keep_at = kKeepFraction * lg.threshold;
+  const DecisionKind kind = is_static ? DecisionKind::kStaticShadow : DecisionKind::kPair;
+  const int light_index = int(group) - 1;  // BakedMaps::lights index of a light group
+  std::vector<uint8_t> kept(cand.sets.size(), 0);
+  auto keep_map = [&](int object, FloatImage map, DecisionStage stage, const std::string& what) {
+    if (grey) map = first_channel(map);
+    const float peak = peak_of(map, texels);
+    const bool keep = !planned || peak > keep_at;
+    decide(kind, stage, object, -1, keep, keep_reason(peak, keep_at, what), peak, keep_at);
+    if (!keep) return false;
+    if (is_static)
+      out.static_shadows.push_back({object, std::move(map)});
+    else
+      out.shadows.push_back({light_index, object, std::move(map)});
+    return true;
+  };
+  for (size_t j = 0; j < cand.sets.size(); ++j) {
+    FloatImage map = dp.shadow[j].dense();
+    if (bounce) ind->add(change[j], map);
+    kept[j] = keep_map(cand.objects[j], std::move(map), DecisionStage::kTraced,
+                       is_static ? "change" : "shadow")
+                  ? 1
+                  : 0;
+  }
+  for (size_t q = 0; q < lg.bounce_only.size(); ++q) {
+    if (only[q].empty()) {
+      decide(kind, DecisionStage::kPlan, lg.bounce_only[q], -1, false,
+             lg.bounce_only_why[q] + "; bounce: " + only_reason[q]);
+      continue;
+    }
+    FloatImage map(w, h, 3);
+    ind->add(std::move(only[q]), map);
+    keep_map(lg.bounce_only[q], std::move(map), DecisionStage::kBounce, "bounce change");
+  }
+
+  // Overlaps: where two objects block the same rays, S_a + S_b removes that light twice; the
+  // pair's correction adds it back while both are visible (inclusion-exclusion, DESIGN.md).
+  for (auto& [key, img] : dp.pairs) {
+    const int oa = cand.objects[size_t(key.first)], ob = cand.objects[size_t(key.second)];
+    const float peak = peak_of(img, texels);
+    if (is_static) {
+      // The pack has no static pair corrections: overlapping static shadows stay the paper's
+      // approximation, reported with their size.
+      if (peak > keep_at)
+        decide(DecisionKind::kStaticOverlap, DecisionStage::kTraced, std::min(oa, ob),
+               std::max(oa, ob), false,
+               "peak " + std::to_string(peak) +
+                   ": static lights have no pair corrections in the pack; where both are "
+                   "visible their overlap is darkened twice",
+               peak, keep_at);
+      continue;
+    }
+    const bool keep =
+        (!planned || peak > keep_at) && kept[size_t(key.first)] && kept[size_t(key.second)];
+    decide(DecisionKind::kOverlap, DecisionStage::kTraced, std::min(oa, ob), std::max(oa, ob), keep,
+           keep_reason(peak, keep_at, "overlap"), peak, keep_at);
+    if (!keep) continue;
+    PairCorrectionMap pc;
+    pc.light = light_index;
+    pc.object_a = std::min(oa, ob);
+    pc.object_b = std::max(oa, ob);
+    pc.map = std::move(img);
+    if (bounce) {
+      // The pair's joint change to the bounce light, from the same rays: the bounce part of the
+      // correction is change_a + change_b - change_ab (one object hides the other's bounce).
+      std::vector<uint8_t> present(scene.objects.size(), 0);
+      present[size_t(oa)] = present[size_t(ob)] = 1;
+      FineSum joint;
+      joint.sparse = {{&dp.shadow[size_t(key.first)], 1.0f},
+                      {&dp.shadow[size_t(key.second)], 1.0f}};
+      joint.dense = {{&pc.map, -1.0f}};
+      const BounceMap ab = ind->change(gb, present, joint, lg.threshold);
+      BounceMap p(ab.size());
+      for (size_t c = 0; c < p.size(); ++c)
+        p[c] = change[size_t(key.first)][c] + change[size_t(key.second)][c] - ab[c];
+      ind->add(std::move(p), pc.map);
+    } else if (grey) {
+      pc.map = first_channel(pc.map);
+    }
+    out.pair_corrections.push_back(std::move(pc));
+  }
+  // Triple overlaps (three objects blocking one ray) are not corrected: the decision says how
+  // much light they carry next to the pair overlaps that are.
+  if (dp.doubly_blocked > 0.0 || dp.triply_blocked > 0.0) {
+    const double share = dp.triply_blocked / (dp.doubly_blocked + dp.triply_blocked);
+    decide(DecisionKind::kTripleOverlap, DecisionStage::kTraced, -1, -1, false,
+           std::to_string(100.0 * share) +
+               "% of the light blocked by several objects is blocked by three or more; only "
+               "pairs are corrected",
+           share);
+  }
+  std::sort(out.shadows.begin(), out.shadows.end(),
+            [](const ShadowMap& a, const ShadowMap& c) { return a.object < c.object; });
+  std::sort(out.static_shadows.begin(), out.static_shadows.end(),
+            [](const StaticShadowMap& a, const StaticShadowMap& c) { return a.object < c.object; });
+  out.seconds = seconds_since(t0);
+  return out;
+}
+
+}  // namespace lightpatch::cooker

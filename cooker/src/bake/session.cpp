@@ -1,0 +1,193 @@
+#include <algorithm>
+#include <mutex>
+
+#include "bake/group.h"
+#include "bake/plan.h"
+#include "bake/session.h"
+#include "indirect/integrator.h"
+#include "lightpatch/cooker/error.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+GatherPreset preset_gather(Quality q) {
+  switch (q) {
+    case Quality::kDraft:
+      return {64, 4, 2};
+    case Quality::kPreview:
+      return {256, 2, 2};
+    case Quality::kProduction:
+      return {1024, 2, 1};
+  }
+  return {256, 2, 2};
+}
+
+}  // namespace
+
+const char* quality_name(Quality q) {
+  switch (q) {
+    case Quality::kDraft:
+      return "draft";
+    case Quality::kPreview:
+      return "preview";
+    case Quality::kProduction:
+      return "production";
+  }
+  return "preview";
+}
+
+Quality parse_quality(const std::string& name) {
+  if (name == "draft") return Quality::kDraft;
+  if (name == "preview") return Quality::kPreview;
+  if (name == "production") return Quality::kProduction;
+  throw CookError("unknown quality '" + name + "' (expected draft, preview or production)");
+}
+
+const char* integrator_name(Integrator) {
+  return "gather";
+}
+
+Integrator parse_integrator(const std::string& name) {
+  if (name == "gather") return Integrator::kGather;
+  throw CookError("unknown integrator '" + name + "' (expected gather)");
+}
+
+GatherPreset gather_preset(const BakeOptions& options) {
+  GatherPreset p = preset_gather(options.quality);
+  if (options.gather_rays > 0) p.rays = options.gather_rays;
+  if (options.indirect_level > 0) p.level = options.indirect_level;
+  if (options.denoise >= 0) p.denoise = options.denoise;
+  return p;
+}
+
+void report_bake(const BakeSession::Impl& impl, Report& report) {
+  const BakeContext& b = impl.ctx;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - impl.start).count();
+  const uint64_t rays = b.tracer.rays_traced() - impl.rays0;
+  std::lock_guard<std::mutex> lock(report.mutex());
+  nlohmann::json& j = report.root()["bake"];
+  j["output_step"] = b.output_step;
+  j["static_step"] = b.static_step;
+  j["output_step_definition"] =
+      "99th percentile over valid texels of the authored state's unshadowed direct irradiance "
+      "(max channel) / 255";
+  j["static_step_definition"] =
+      "min(output_step, the brightest static light's peak unshadowed irradiance / 255): the "
+      "significance of the base map, static indirect light and static shadows";
+  j["quality"] = quality_name(b.options.quality);
+  j["plan_effects"] = b.options.plan_effects;
+  j["area_samples"] = b.area_samples;
+  j["threads"] = b.threads;
+  j["epsilon"] = b.eps;
+  j["rays"] = j.value("rays", uint64_t{0}) + rays;
+  j["seconds"] = j.value("seconds", 0.0) + seconds;
+  const double total_s = j["seconds"].get<double>();
+  j["rays_per_second"] =
+      total_s > 0.0 ? static_cast<double>(j["rays"].get<uint64_t>()) / total_s : 0.0;
+  nlohmann::json& ind = report.root()["indirect"];
+  ind["enabled"] = b.indirect != nullptr;
+  if (b.indirect) ind.update(b.indirect->describe());
+}
+
+BakeSession::BakeSession(const Scene& scene, const Layout& layout, const TexelSet& texels,
+                         const Tracer& tracer, const BakeOptions& options, Progress& progress,
+                         Report& report) {
+  progress.begin("plan", 1);
+  impl_ = std::make_unique<Impl>(scene, layout, texels, tracer, options);
+  impl_->rays0 = tracer.rays_traced();
+  impl_->plan = make_plan(impl_->ctx);
+  report_decisions(scene, impl_->plan.decisions, report);
+  progress.end();
+  if (options.indirect) impl_->ctx.indirect = make_gather_integrator(impl_->ctx, progress, report);
+}
+
+BakeSession::~BakeSession() = default;
+
+const BakePlan& BakeSession::plan() const {
+  return impl_->plan;
+}
+
+float BakeSession::output_step() const {
+  return impl_->ctx.output_step;
+}
+
+GroupBake BakeSession::bake_group(size_t group, Progress& progress, Report& report) const {
+  if (group >= impl_->plan.groups.size())
+    throw CookError("bake: no light group " + std::to_string(group));
+  return bake_light_group(impl_->ctx, impl_->plan, group, progress, report);
+}
+
+BakedMaps BakeSession::assemble(std::vector<GroupBake> groups, Report& report) const {
+  const BakePlan& plan = impl_->plan;
+  const Scene& scene = impl_->ctx.scene;
+  std::sort(groups.begin(), groups.end(),
+            [](const GroupBake& a, const GroupBake& b) { return a.group < b.group; });
+  for (size_t i = 0; i < groups.size(); ++i) {
+    if (groups[i].group != i || groups.size() != plan.groups.size())
+      throw CookError("bake: assembling needs every light group exactly once");
+  }
+  BakedMaps maps;
+  maps.output_step = plan.output_step;
+  nlohmann::json pairs = nlohmann::json::array();
+  auto pair_record = [&](const Decision& d) {
+    pairs.push_back({{"light", scene.lights[size_t(d.light)].name},
+                     {"object", scene.objects[size_t(d.object)].name},
+                     {"kept", d.taken},
+                     {"stage", d.stage == DecisionStage::kPlan     ? "geometric"
+                               : d.stage == DecisionStage::kBounce ? "bounce"
+                                                                   : "traced"},
+                     {"reason", d.reason}});
+    if (!std::isnan(d.value)) pairs.back()["peak"] = d.value;
+  };
+  for (const Decision& d : plan.decisions)
+    if (d.kind == DecisionKind::kPair) pair_record(d);
+  for (GroupBake& g : groups) {
+    report_decisions(scene, g.decisions, report);
+    for (const Decision& d : g.decisions)
+      if (d.kind == DecisionKind::kPair) pair_record(d);
+    {
+      std::lock_guard<std::mutex> lock(report.mutex());
+      report.root()["bake"]["group_seconds"][plan.groups[g.group].name] = g.seconds;
+    }
+    if (g.group == 0) {
+      maps.base = std::move(g.map);
+      maps.static_shadows = std::move(g.static_shadows);
+      continue;
+    }
+    maps.lights.push_back(plan.groups[g.group].light);
+    maps.contribution.push_back(std::move(g.map));
+    for (ShadowMap& s : g.shadows) maps.shadows.push_back(std::move(s));
+    for (PairCorrectionMap& p : g.pair_corrections) maps.pair_corrections.push_back(std::move(p));
+  }
+  {
+    std::lock_guard<std::mutex> lock(report.mutex());
+    int kept = 0;
+    for (const nlohmann::json& p : pairs) kept += p["kept"].get<bool>() ? 1 : 0;
+    report.root()["pairs_kept"] = kept;
+    report.root()["pairs_skipped"] = static_cast<int>(pairs.size()) - kept;
+    report.root()["pairs"] = std::move(pairs);
+  }
+  report_bake(*impl_, report);
+  return maps;
+}
+
+BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& texels,
+                    const Tracer& tracer, const BakeOptions& options, Progress& progress,
+                    Report& report) {
+  BakeSession session(scene, layout, texels, tracer, options, progress, report);
+  std::vector<GroupBake> groups;
+  for (size_t g = 0; g < session.plan().groups.size(); ++g)
+    groups.push_back(session.bake_group(g, progress, report));
+  return session.assemble(std::move(groups), report);
+}
+
+FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& texels,
+                      const Tracer& tracer, const StateSpec& state, const BakeOptions& options,
+                      Progress& progress, Report& report) {
+  BakeSession session(scene, layout, texels, tracer, options, progress, report);
+  return session.bake_state(state, progress, report);
+}
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,111 @@
+// One scene state baked directly, as a conventional light mapper would: the ground truth a
+// recomposition must match. The same samples as the groups' direct passes and the same bounce
+// light (the integrator's state solve), so a single-object state equals B + sum f_l (C_l - S_ol).
+#include <mutex>
+
+#include "bake/session.h"
+#include "indirect/integrator.h"
+#include "lightpatch/cooker/error.h"
+#include "worker_pool.h"
+
+namespace lightpatch::cooker {
+
+FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
+                                   Report& report) const {
+  const BakeContext& b = impl_->ctx;
+  const Scene& scene = b.scene;
+  const TexelSet& texels = b.texels;
+  // Resolve the state by name.
+  std::vector<glm::vec3> radiant(scene.lights.size());  // colour * intensity, 0 when off
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    radiant[i] = scene.lights[i].color * scene.lights[i].intensity;
+  std::vector<std::string> unknown;
+  for (const auto& [name, o] : state.lights) {
+    size_t i = 0;
+    while (i < scene.lights.size() && scene.lights[i].name != name) ++i;
+    if (i == scene.lights.size()) {
+      unknown.push_back("light '" + name + "'");
+      continue;
+    }
+    const Light& l = scene.lights[i];
+    if (!l.semi_dynamic) {
+      throw CookError("state changes light '" + name +
+                      "', which is static (only semi-dynamic lights can change)");
+    }
+    const glm::vec3 color = o.has_color ? glm::vec3(o.color[0], o.color[1], o.color[2]) : l.color;
+    const float intensity = o.has_intensity ? o.intensity : l.intensity;
+    radiant[i] = (o.has_on && !o.on) ? glm::vec3(0.0f) : color * intensity;
+  }
+  std::vector<uint8_t> visible(scene.objects.size(), 1);
+  for (const auto& [name, vis] : state.objects) {
+    size_t i = 0;
+    while (i < scene.objects.size() && scene.objects[i].name != name) ++i;
+    if (i == scene.objects.size()) {
+      unknown.push_back("object '" + name + "'");
+      continue;
+    }
+    visible[i] = vis ? 1 : 0;
+  }
+  if (!unknown.empty()) {
+    std::string list;
+    for (const std::string& u : unknown) list += (list.empty() ? "" : ", ") + u;
+    throw CookError(
+        "the state names what the scene does not have (or has not marked semiDynamic): " + list);
+  }
+
+  const int w = texels.width, h = texels.height;
+  FloatImage out(w, h, 3);
+  const int max_objects = static_cast<int>(scene.objects.size());
+  progress.begin("bake state", static_cast<uint64_t>(h));
+  parallel_for(h, b.threads, [&](int y) {
+    std::vector<LightSample> samples;
+    std::vector<int> hit(static_cast<size_t>(std::max(1, max_objects)));
+    auto visible_through = [&](const LightSample& s) {
+      const int n = b.tracer.shadow_query(s.origin, s.dir, s.tmin, s.tmax, hit.data(), max_objects);
+      if (n < 0) return false;
+      for (int j = 0; j < n; ++j)
+        if (visible[static_cast<size_t>(hit[static_cast<size_t>(j)])]) return false;
+      return true;
+    };
+    for (int x = 0; x < w; ++x) {
+      const size_t t = texels.index(x, y);
+      if (!texels.valid[t]) continue;
+      glm::vec3 e(0.0f);
+      for (size_t li = 0; li < scene.lights.size(); ++li) {
+        if (max3(radiant[li]) <= 0.0f) continue;
+        samples.clear();
+        b.light_samples(static_cast<int>(li), t, samples);
+        float sum = 0.0f;
+        for (const LightSample& s : samples)
+          if (visible_through(s)) sum += s.irradiance.x;
+        e += radiant[li] * sum;
+      }
+      samples.clear();
+      b.emissive_samples(t, samples);
+      for (const LightSample& s : samples)
+        if (visible_through(s)) e += s.irradiance;
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = e[c];
+    }
+    progress.advance();
+  });
+  report.stage_time("bake.state", progress.end());
+  if (b.indirect) {
+    // The state's bounce light in one solve: every group's direct light at its state's colour
+    // is one source, the visible objects are present. Its significance is the finest of the
+    // groups' (each at its state's brightness), so the state is solved at least as finely as
+    // the decomposition's maps.
+    progress.begin("bounce light", 1);
+    float threshold = b.static_step;
+    for (size_t li = 0; li < scene.lights.size(); ++li) {
+      if (scene.lights[li].semi_dynamic && max3(radiant[li]) > 0.0f)
+        threshold = std::min(threshold, b.lights[li].threshold * max3(radiant[li]));
+    }
+    const FloatImage direct = out;
+    b.indirect->add_state(direct, visible, threshold, out);
+    report.stage_time("bake.state_bounce", progress.end());
+  }
+  report_bake(*impl_, report);
+  return out;
+}
+
+}  // namespace lightpatch::cooker

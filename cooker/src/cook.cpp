@@ -1,0 +1,109 @@
+#include "lightpatch/cooker/cook.h"
+
+#include <mutex>
+
+#include "lightpatch/cooker/import.h"
+#include "lightpatch/cooker/texel_builder.h"
+#include "lightpatch/cooker/unwrap.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+template <typename F>
+auto timed(Progress& progress, Report& report, const std::string& stage, F&& f) {
+  progress.begin(stage, 1);
+  auto result = f();
+  report.stage_time(stage, progress.end());
+  return result;
+}
+
+}  // namespace
+
+PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress& progress,
+                            Report& report) {
+  PreparedScene p;
+  p.scene = std::move(scene);
+  p.layout = timed(progress, report, "layout", [&] { return build_layout(p.scene, options); });
+  for (const std::string& note : p.layout.notes) progress.message("note: " + note);
+  p.tracer = timed(progress, report, "trace setup", [&] { return make_embree_tracer(p.scene); });
+  p.texels = timed(progress, report, "texels",
+                   [&] { return build_texels(p.scene, p.layout, p.tracer.get()); });
+
+  size_t valid = 0;
+  for (uint8_t v : p.texels.valid) valid += v ? 1 : 0;
+  int semi_lights = 0;
+  for (const Light& l : p.scene.lights) semi_lights += l.semi_dynamic ? 1 : 0;
+  std::lock_guard<std::mutex> lock(report.mutex());
+  nlohmann::json& s = report.root()["scene"];
+  s["triangles"] = p.scene.triangle_count();
+  s["meshes"] = p.scene.meshes.size();
+  s["lights"] = p.scene.lights.size();
+  s["semi_dynamic_lights"] = semi_lights;
+  s["objects"] = p.scene.objects.size();
+  s["scale_m"] = p.scene.scale();
+  nlohmann::json& l = report.root()["layout"];
+  l["width"] = p.layout.width;
+  l["height"] = p.layout.height;
+  l["texels_per_unit"] = p.layout.texels_per_unit;
+  l["verbatim_uv1"] = p.layout.verbatim_uv1;
+  l["regions"] = p.layout.regions.size();
+  l["notes"] = p.layout.notes;
+  l["texels"] = p.texels.position.size();
+  l["valid_texels"] = valid;
+  return p;
+}
+
+PreparedScene prepare_scene(const std::string& path, const LayoutOptions& options,
+                            Progress& progress, Report& report, const ImportLimits& limits) {
+  Scene scene = timed(progress, report, "import", [&] { return import_gltf(path, limits); });
+  {
+    std::lock_guard<std::mutex> lock(report.mutex());
+    report.root()["scene"]["path"] = path;
+  }
+  return prepare_scene(std::move(scene), options, progress, report);
+}
+
+void finalize_maps(BakedMaps& maps, const PreparedScene& p, Progress& progress, Report& report) {
+  progress.begin("finalize maps", 1 + maps.contribution.size() + maps.shadows.size() +
+                                      maps.pair_corrections.size() + maps.static_shadows.size());
+  auto fin = [&](FloatImage& m) {
+    finalize_map(m, p.scene, p.layout, p.texels);
+    progress.advance();
+  };
+  fin(maps.base);
+  for (FloatImage& c : maps.contribution) fin(c);
+  for (ShadowMap& s : maps.shadows) fin(s.map);
+  for (PairCorrectionMap& c : maps.pair_corrections) fin(c.map);
+  for (StaticShadowMap& s : maps.static_shadows) fin(s.map);
+  report.stage_time("finalize", progress.end());
+}
+
+PackOptions pack_options(const BakeOptions& bake) {
+  PackOptions po;
+  po.keep_colour = !bake.plan_effects;
+  return po;
+}
+
+std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, Progress& progress,
+                               Report& report, BakedMaps* maps_out) {
+  BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, bake, progress, report);
+  finalize_maps(maps, p, progress, report);
+  std::vector<uint8_t> pack = timed(progress, report, "pack", [&] {
+    return build_pack(p.scene, p.layout, maps, pack_options(bake), report);
+  });
+  if (maps_out) *maps_out = std::move(maps);
+  return pack;
+}
+
+FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const BakeOptions& bake,
+                      Progress& progress, Report& report) {
+  FloatImage map =
+      bake_state(p.scene, p.layout, p.texels, *p.tracer, state, bake, progress, report);
+  progress.begin("finalize maps", 1);
+  finalize_map(map, p.scene, p.layout, p.texels);
+  report.stage_time("finalize", progress.end());
+  return map;
+}
+
+}  // namespace lightpatch::cooker

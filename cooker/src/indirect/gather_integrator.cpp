@@ -1,0 +1,117 @@
+// The final-gathering integrator (gather.h, solve.h) behind IndirectIntegrator.
+#include <chrono>
+
+#include "indirect/gather.h"
+#include "indirect/integrator.h"
+#include "indirect/solve.h"
+
+namespace lightpatch::cooker {
+
+glm::vec3 FineSum::at(size_t texel) const {
+  glm::vec3 v(0.0f);
+  for (const auto& [m, k] : sparse) {
+    if (m->channels() == 3)
+      v += k * glm::vec3(m->at(texel, 0), m->at(texel, 1), m->at(texel, 2));
+    else
+      v += k * glm::vec3(m->at(texel, 0));
+  }
+  for (const auto& [m, k] : dense) {
+    const float* p = m->data.data() + texel * size_t(m->channels);
+    v += k * (m->channels == 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]));
+  }
+  return v;
+}
+
+namespace {
+
+// Bounce terms below this fraction of a group's significance threshold are dropped (the series
+// stops when a bounce adds less anywhere), scaled by 1 - the mean albedo: a series cut at a term
+// t leaves a tail of about t * albedo / (1 - albedo), which is what the decomposition and
+// bake_state may differ by.
+constexpr float kBounceTolerance = 0.02f;
+
+class GatherIntegrator final : public IndirectIntegrator {
+ public:
+  GatherIntegrator(const BakeContext& b, Progress& progress, Report& report)
+      : b_(b), preset_(gather_preset(b.options)) {
+    progress.begin("gather rays", 1);
+    GatherOptions go;
+    go.rays = preset_.rays;
+    go.seed = b.options.seed;
+    go.threads = b.threads;
+    op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
+    report.stage_time("bake.gather_rays", progress.end());
+  }
+
+  GroupBounce prepare(const FloatImage& direct, float threshold) const override {
+    GroupBounce g;
+    const CoarseMap source = coarse_source(op_, b_.texels, direct);
+    SolveStats st;
+    g.indirect = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st);
+    g.direct_radiance = source;
+    g.bounce_radiance = bounce_radiance(op_, g.indirect);
+    g.peak = peak(g.indirect);
+    g.bounces = st.bounces;
+    return g;
+  }
+
+  BounceMap change(const GroupBounce& group, const std::vector<uint8_t>& present,
+                   const FineSum& blocked, float threshold) const override {
+    const CoarseMap src =
+        blocked.sparse.empty() && blocked.dense.empty()
+            ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
+            : coarse_source_of(op_, b_.texels, [&](size_t t) { return blocked.at(t); });
+    return solve_change(op_, present, {group.direct_radiance, group.bounce_radiance}, src,
+                        options(threshold, 1));
+  }
+
+  float first_change(const GroupBounce& group, const std::vector<uint8_t>& present) const override {
+    return first_change_peak(op_, present, {group.direct_radiance, group.bounce_radiance});
+  }
+
+  void add(BounceMap map, FloatImage& fine) const override {
+    denoise(op_.grid, preset_.denoise, map);
+    add_magnified(op_.grid, b_.texels, map, fine);
+  }
+
+  void add_state(const FloatImage& direct, const std::vector<uint8_t>& present, float threshold,
+                 FloatImage& fine) const override {
+    const CoarseMap source = coarse_source(op_, b_.texels, direct);
+    add(solve_indirect(op_, present, source, options(threshold, b_.threads)), fine);
+  }
+
+  nlohmann::json describe() const override {
+    return {{"integrator", "gather"},
+            {"level", preset_.level},
+            {"rays_per_coarse_texel", preset_.rays},
+            {"rays_after_first_bounce", op_.rays_after_first},
+            {"denoise_passes", preset_.denoise},
+            {"coarse_texels", op_.grid.size()},
+            {"buried_texels", op_.buried_texels},
+            {"gather_rays", op_.rays_traced},
+            {"crossings", op_.crossings.size()},
+            {"mean_albedo", op_.mean_albedo}};
+  }
+
+ private:
+  SolveOptions options(float threshold, int threads) const {
+    SolveOptions so;
+    so.tolerance = kBounceTolerance * threshold * (1.0f - op_.mean_albedo);
+    so.max_bounces = 1024;
+    so.threads = threads;
+    return so;
+  }
+
+  const BakeContext& b_;
+  GatherPreset preset_;
+  GatherOperator op_;
+};
+
+}  // namespace
+
+std::unique_ptr<IndirectIntegrator> make_gather_integrator(const BakeContext& b, Progress& progress,
+                                                           Report& report) {
+  return std::make_unique<GatherIntegrator>(b, progress, report);
+}
+
+}  // namespace lightpatch::cooker

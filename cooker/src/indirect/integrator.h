@@ -1,0 +1,73 @@
+// Bounce light for a bake (BakeOptions::integrator; DESIGN.md, "The method in one screen"): one
+// instance per bake, shared by its light groups and the states it bakes, built once (final
+// gathering traces its rays then). Every result is linear in the light and comes from the same
+// random numbers, so C_l, S_ol = C_l - T_ol, the pair corrections and bake_state of any state
+// agree: a recomposed state equals bake_state of that state.
+#pragma once
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "bake/context.h"
+#include "bake/direct_pass.h"
+#include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/report.h"
+
+namespace lightpatch::cooker {
+
+// An integrator's result in its own linear representation (final gathering: coarse texels).
+// Sums and differences of such maps are meaningful; add() turns one into light-map irradiance.
+using BounceMap = std::vector<glm::vec3>;
+
+// One group's bounce light with no object present, and what its changes start from.
+struct GroupBounce {
+  BounceMap indirect;
+  BounceMap direct_radiance;  // what the group's surfaces send on: their direct light
+  BounceMap bounce_radiance;  // ... and their bounce light
+  float peak = 0.0f;          // largest irradiance of `indirect`
+  int bounces = 0;
+};
+
+// A linear combination of fine maps: the direct light a slot's objects block, or the joint
+// change of a pair (its two slots less the light both block).
+struct FineSum {
+  std::vector<std::pair<const SparseMap*, float>> sparse;
+  std::vector<std::pair<const FloatImage*, float>> dense;
+  glm::vec3 at(size_t texel) const;
+};
+
+class IndirectIntegrator {
+ public:
+  virtual ~IndirectIntegrator() = default;
+  // The bounce light of a group's direct light (fine, 1 or 3 channels, the group's units).
+  // `threshold`: the group's significance (terms far below it are dropped).
+  virtual GroupBounce prepare(const FloatImage& direct, float threshold) const = 0;
+  // What the objects `present` (one byte per Scene object) change in a prepared group's bounce
+  // light: I(no object) - I(present), given the direct light they block. Single-threaded: the
+  // caller runs changes in parallel.
+  virtual BounceMap change(const GroupBounce& group, const std::vector<uint8_t>& present,
+                           const FineSum& blocked, float threshold) const = 0;
+  // A cheap bound of the first bounce of change() for objects that block no direct light.
+  virtual float first_change(const GroupBounce& group,
+                             const std::vector<uint8_t>& present) const = 0;
+  // Adds a bounce map to a fine map (3 channels) as light-map irradiance.
+  virtual void add(BounceMap map, FloatImage& fine) const = 0;
+  // A whole state's bounce light from its direct light (3 channels) with the objects `present`,
+  // added to `fine`. `threshold`: the finest significance among the state's groups.
+  virtual void add_state(const FloatImage& direct, const std::vector<uint8_t>& present,
+                         float threshold, FloatImage& fine) const = 0;
+  // Settings and statistics for the report.
+  virtual nlohmann::json describe() const = 0;
+};
+
+// Final gathering (gather.h): traces the gather rays of the context's texels.
+std::unique_ptr<IndirectIntegrator> make_gather_integrator(const BakeContext& b, Progress& progress,
+                                                           Report& report);
+
+}  // namespace lightpatch::cooker
