@@ -106,4 +106,16 @@ FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const Bake
   return map;
 }
 
+ReferenceBake cook_reference_state(const PreparedScene& p, const StateSpec& state,
+                                   const ReferenceOptions& options, Progress& progress,
+                                   Report& report) {
+  ReferenceBake rb = bake_reference(p.scene, p.texels, *p.tracer, state, options, progress, report);
+  progress.begin("finalize maps", 2);
+  finalize_map(rb.map, p.scene, p.layout, p.texels);
+  progress.advance();
+  finalize_map(rb.std_error, p.scene, p.layout, p.texels);
+  report.stage_time("finalize", progress.end());
+  return rb;
+}
+
 }  // namespace lightpatch::cooker

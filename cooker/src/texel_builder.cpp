@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lightpatch/cooker/tracer.h"
+#include "surface_albedo.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -87,25 +88,6 @@ glm::vec3 away_from_edges(const glm::vec3& bary, const glm::vec2 p[3]) {
   return bary + (centroid - bary) * f;
 }
 
-glm::vec3 sample_albedo(const Scene& scene, const MeshInstance& m, const glm::vec3& bary,
-                        uint32_t i0, uint32_t i1, uint32_t i2) {
-  const Material& mat = scene.materials[size_t(m.material)];
-  glm::vec3 albedo = mat.albedo;
-  if (mat.albedo_texture >= 0 && size_t(mat.albedo_texture) < scene.textures.size() &&
-      !m.uv0.empty()) {
-    const Texture& tex = scene.textures[size_t(mat.albedo_texture)];
-    if (tex.width > 0 && tex.height > 0) {
-      const glm::vec2 uv = bary.x * m.uv0[i0] + bary.y * m.uv0[i1] + bary.z * m.uv0[i2];
-      // Nearest texel, repeat wrapping (glTF's default sampler).
-      const float fu = uv.x - std::floor(uv.x), fv = uv.y - std::floor(uv.y);
-      const int tx = std::min(tex.width - 1, static_cast<int>(fu * float(tex.width)));
-      const int ty = std::min(tex.height - 1, static_cast<int>(fv * float(tex.height)));
-      albedo *= tex.linear_rgb[size_t(ty) * size_t(tex.width) + size_t(tx)];
-    }
-  }
-  return glm::clamp(albedo, glm::vec3(0.0f), glm::vec3(1.0f));
-}
-
 // Rasterizes the meshes of one region into its rectangle.
 void rasterize_region(const Scene& scene, const Layout& layout, int region_index, TexelSet& ts,
                       std::vector<Candidate>& best) {
@@ -147,7 +129,7 @@ void rasterize_region(const Scene& scene, const Layout& layout, int region_index
               bary.x * m.normals[s[0]] + bary.y * m.normals[s[1]] + bary.z * m.normals[s[2]];
           const float len = glm::length(n);
           ts.normal[i] = len > 1e-6f ? n / len : face;
-          ts.albedo[i] = sample_albedo(scene, m, bary, s[0], s[1], s[2]);
+          ts.albedo[i] = surface_albedo(scene, m, s[0], s[1], s[2], bary.y, bary.z);
           ts.mesh[i] = mi;
           ts.region[i] = region_index;
         }

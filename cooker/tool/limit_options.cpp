@@ -2,7 +2,9 @@
 
 #include <cstring>
 
+#include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/io.h"
+#include "lightpatch/planner.h"
 
 namespace lightpatch::tool {
 
@@ -14,17 +16,17 @@ const char* const kImportLimitsHelp =
     "  --max-triangles N      refuse scenes over N triangles, a mesh counted once per node that\n"
     "                         instances it, counted before anything is read (default 4000000)\n"
     "  --max-vertices N       the same for vertices (POSITION elements; default 12000000)\n"
-    "  --max-texture-pixels N refuse base-colour images over N pixels in all, from their headers\n"
-    "                         before decoding (default 33554432: two 4096x4096 images)\n"
+    "  --max-texture-pixels N  refuse base-colour images over N pixels in all, read from\n"
+    "                         their headers before decoding (default 33554432: two 4096x4096\n"
+    "                         images)\n"
     "  --uri-root DIR         also read buffers and images under DIR (repeatable); by default\n"
     "                         they must lie in the scene's folder or below, links resolved\n";
 
 const char* const kRecomposeLimitsHelp =
     "  --max-lightmap-texels N  refuse packs whose light map has over N texels (default\n"
     "                         16777216, 4096x4096: what the runtime allocates for it)\n"
-    "  --max-texel-value V    refuse packs with a patch adding over V to a texel (scale, and\n"
-    "                         scale x authored light colour x intensity; default 65504, the\n"
-    "                         largest half float of the GLES runtime's target)\n";
+    "                         (a pack whose authored light map could exceed 1e36 is refused\n"
+    "                         too, as the runtime does; no option raises that)\n";
 
 void apply_input_size_option(Args& args) {
   const uint64_t mib = args.count_option(
@@ -52,24 +54,32 @@ RecomposeLimits parse_recompose_limits(Args& args) {
   l.max_lightmap_texels =
       args.count_option("--max-lightmap-texels", l.max_lightmap_texels, 1,
                         uint64_t(pack::kMaxLightmapSize) * pack::kMaxLightmapSize);
-  l.max_texel_value = args.float_option("--max-texel-value", l.max_texel_value, 1.0f, 3.0e38f);
   return l;
 }
 
 std::string pack_error_text(const Error& error) {
   std::string text = std::string(status_name(error.status)) + ": " + error.message;
-  if (error.status != Status::kOverLimit) return text;
-  if (std::strstr(error.message, "max_lightmap_texels"))
+  if (error.status == Status::kOverLimit && std::strstr(error.message, "max_lightmap_texels"))
     text += " (--max-lightmap-texels N raises it)";
-  else if (std::strstr(error.message, "max_texel_value"))
-    text += " (--max-texel-value V raises it)";
+  if (error.status == Status::kOutOfRange)
+    text += " (no option raises it: lower the lights' authored intensities)";
   return text;
 }
 
-std::string default_limits_warning(const std::vector<uint8_t>& pack) {
+Status open_pack(const void* data, uint64_t size, const RecomposeLimits& limits, PackView* view,
+                 Error* error) {
+  const Status s = PackView::open(data, size, limits, view, error);
+  return s != Status::kOk ? s : check_authored_map_bound(*view, error);
+}
+
+std::string check_cooked_pack(const std::vector<uint8_t>& pack) {
   PackView view;
   Error error;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOverLimit) return {};
+  const Status s = open_pack(pack.data(), pack.size(), RecomposeLimits(), &view, &error);
+  if (s == Status::kOutOfRange)
+    throw cooker::CookError("the cooked pack is one the runtime refuses: " +
+                            pack_error_text(error));
+  if (s != Status::kOverLimit) return {};
   return "the pack is over the runtime's default limits (" + pack_error_text(error) +
          "): verify and recompose refuse it without that option, and a game must raise "
          "RecomposeLimits (pack_view.h)";

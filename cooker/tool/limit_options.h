@@ -21,15 +21,21 @@ extern const char* const kInputSizeHelp;
 cooker::ImportLimits parse_import_limits(Args& args);
 extern const char* const kImportLimitsHelp;
 
-// --max-lightmap-texels N, --max-texel-value V: the verbs that open a pack.
+// --max-lightmap-texels N: the verbs that open a pack.
 RecomposeLimits parse_recompose_limits(Args& args);
 extern const char* const kRecomposeLimitsHelp;
 
 // A pack's validation message; for Status::kOverLimit with the option that raises the limit.
 std::string pack_error_text(const Error& error);
 
-// For a pack just cooked: empty when the runtime takes it with its default limits, else what
-// exceeds them (a warning: the user asked for a large light map or bright lights).
-std::string default_limits_warning(const std::vector<uint8_t>& pack);
+// PackView::open within `limits`, then check_authored_map_bound (planner.h): a pack the runtime
+// opens. What `verify` checks.
+Status open_pack(const void* data, uint64_t size, const RecomposeLimits& limits, PackView* view,
+                 Error* error);
+
+// For a pack just cooked: throws CookError when the runtime would refuse it whatever its limits
+// (its authored light map could exceed kMaxAuthoredMapBound); returns a warning when it is over
+// the default RecomposeLimits (the user asked for a large light map), else empty.
+std::string check_cooked_pack(const std::vector<uint8_t>& pack);
 
 }  // namespace lightpatch::tool

@@ -65,7 +65,21 @@ constexpr const char* kBakeStateHelp =
     "options:\n"
     "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
     "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
-    "                         authored, all on and visible)\n";
+    "                         authored, all on and visible)\n"
+    "  --integrator I         gather (default): the cook's integrator (below);\n"
+    "                         reference: unbiased path tracing from every texel (next-event\n"
+    "                         estimation to every light, MIS for light spheres and emissive\n"
+    "                         surfaces, Russian roulette), the independent reference; it also\n"
+    "                         writes the per-texel standard error and reports its noise\n"
+    "  --samples N            reference: paths per texel (2..1048576, default 256); the noise\n"
+    "                         falls as 1/sqrt(N)\n"
+    "  --target-noise P       reference: stop early, at the first power of two of samples (from\n"
+    "                         64) whose noise is at most P percent relative RMSE; --samples is\n"
+    "                         then the cap (default: off, all --samples)\n"
+    "  --std-error ERR.pfm    reference: where the standard-error map goes (RGB, same units\n"
+    "                         and layout as the map; default MAP.stderr.pfm beside MAP.pfm)\n"
+    "  (with --integrator reference, --seed and --threads apply; the quality, gather, denoise\n"
+    "  and area-sample options do not)\n";
 
 constexpr const char* kAccuracyHelp =
     "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
@@ -74,10 +88,13 @@ constexpr const char* kAccuracyHelp =
     "surfaces),\n"
     "texel density (coarser pages) and the 8-bit encoding (linear, square; default auto). Each\n"
     "setting is cooked (bake, finalize, pack), the authored state is recomposed from the pack on\n"
-    "the CPU reference and compared with a reference bake of the same state (bake-state at 4x\n"
-    "production's gather rays and area samples; 2x with --quick). The reference is\n"
-    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm, keyed by the scene, its\n"
-    "layout and the reference options, and reused by later runs.\n\n"
+    "the CPU reference and compared with a reference bake of the same state: by default the\n"
+    "path tracer (bake-state --integrator reference: up to 4096 samples per texel, stopping\n"
+    "once its noise is at most 0.5 % relative RMSE; 64 samples with --quick), whose own noise\n"
+    "the CSV notes give; a row whose error is within that noise is marked\n"
+    "(within_noise) and does not beat other such rows on the Pareto front. The reference is\n"
+    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm (and .stderr.pfm), keyed\n"
+    "by the scene, its layout and the reference options, and reused by later runs.\n\n"
     "Errors over the valid light-map texels: relative RMSE (sqrt(sum (x-r)^2 / sum r^2)), max\n"
     "relative error over texels that matter (reference luminance >= 1% of its 99th percentile;\n"
     "max_c |x_c-r_c| / max_c r_c) and PSNR (peak: 99th percentile of the reference). Density\n"
@@ -91,9 +108,17 @@ constexpr const char* kAccuracyHelp =
     "                         rows (8..4096; default 128, 32 with --quick)\n"
     "  --quick                a short sweep for tests and CI: draft, production and draft's two\n"
     "                         encodings at a 32x32 page\n"
-    "  --reference-scale K    the reference's gather rays and area samples are K\n"
-    "                         times production's (1..16; default 4, 2 with --quick); its time\n"
-    "                         grows with K\n"
+    "  --reference-integrator I  reference (default): the path tracer; cook: the cook's own\n"
+    "                         integrator at high settings (the former reference; its noise is\n"
+    "                         not estimated)\n"
+    "  --reference-samples N  path tracer: samples per texel at most (2..1048576; default 4096,\n"
+    "                         64 with --quick); its noise falls as 1/sqrt(N), its time grows\n"
+    "                         with N\n"
+    "  --reference-noise P    path tracer: stop at the first power of two of samples (from 64)\n"
+    "                         whose noise is at most P percent relative RMSE (default 0.5; 0 =\n"
+    "                         all --reference-samples; off with --quick)\n"
+    "  --reference-scale K    --reference-integrator cook: gather rays and area samples K times\n"
+    "                         production's (1..16; default 4, 2 with --quick)\n"
     "  --runtime-csv OUT.csv  also the runtime: the encoding rows' bake packed with each\n"
     "                         encoding (auto, linear, square) and recomposed on the CPU reference\n"
     "                         (float32 target; median rebuild time), against the float "
@@ -114,7 +139,9 @@ const Verb kVerbs[] = {
      "[--denoise N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
-     "bake-state SCENE [--state STATE.json] -o MAP.pfm [cook's options]", kBakeStateHelp},
+     "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator gather|reference] "
+     "[--samples N] [--std-error ERR.pfm] [cook's options]",
+     kBakeStateHelp},
     {"info", lightpatch::tool::verb_info, "info PACK [--json]",
      "Prints a pack's lights, objects, groups, patches, atlases and bytes.\n\n"
      "options:\n  --json   machine-readable output\n"},
@@ -136,7 +163,9 @@ const Verb kVerbs[] = {
      "options:\n  --json   machine-readable output\n"},
     {"accuracy", lightpatch::tool::verb_accuracy,
      "accuracy SCENE --csv OUT.csv --plot OUT.png [--runtime-csv OUT.csv [--gles]] "
-     "[--lightmap-size N] [--quick] [--reference-scale K] [--no-cache] [--seed N] [--threads N] "
+     "[--lightmap-size N] [--quick] [--reference-integrator reference|cook] "
+     "[--reference-samples N] [--reference-noise P] [--reference-scale K] [--no-cache] [--seed N] "
+     "[--threads N] "
      "[--quiet]",
      kAccuracyHelp},
 };

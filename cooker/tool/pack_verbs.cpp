@@ -35,7 +35,7 @@ struct OpenPack {
     char message[256] = {};
     if (!mapping.open(path.c_str(), message, sizeof(message))) throw CookError(message);
     Error error;
-    if (PackView::open(mapping.data(), mapping.size(), limits, &view, &error) != Status::kOk) {
+    if (open_pack(mapping.data(), mapping.size(), limits, &view, &error) != Status::kOk) {
       throw CookError(path + ": " + pack_error_text(error));
     }
   }
@@ -194,7 +194,7 @@ int verb_verify(Args& args) {
   }
   PackView view;
   Error error;
-  if (PackView::open(mapping.data(), mapping.size(), limits, &view, &error) != Status::kOk) {
+  if (open_pack(mapping.data(), mapping.size(), limits, &view, &error) != Status::kOk) {
     std::fprintf(stderr, "%s: INVALID: %s\n", path.c_str(), pack_error_text(error).c_str());
     return 1;
   }

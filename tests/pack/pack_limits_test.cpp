@@ -1,6 +1,7 @@
-// What the loader refuses beyond the format's ranges (pack_view.h, RecomposeLimits), so that a
-// pack `verify` accepts is one the recomposers can rebuild: patch scales past the half-float
-// range, light maps past the memory the runtime states, names that are not UTF-8.
+// What the loader refuses beyond the format's ranges (pack_view.h, RecomposeLimits: light maps past
+// the memory the runtime states; names that are not UTF-8) and what check_authored_map_bound
+// (planner.h) refuses as Runtime::open does (light maps that could exceed the float range), so
+// that a pack `verify` accepts is one the runtime opens.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
+#include "lightpatch/planner.h"
 #include "lightpatch/scene_state.h"
 #include "lightpatch/utf8.h"
 #include "pack_bytes.h"
@@ -58,46 +60,53 @@ uint8_t* strings(uint8_t* d) {
   return record<uint8_t>(d, pack::kSectionStrings, 0);
 }
 
-TEST(PackLimits, APatchScalePastTheHalfFloatRangeIsRefused) {
-  // Patch 0 is the base map's (groups sorted by kind): its factor is 1.
+// What check_authored_map_bound says of a pack (after PackView::open accepted it).
+Status authored_bound(Edited& e, std::string* message) {
+  PackView view;
+  if (Status s = e.open(RecomposeLimits(), message, &view); s != Status::kOk) return s;
+  Error error;
+  const Status s = check_authored_map_bound(view, &error);
+  *message = error.message;
+  return s;
+}
+
+TEST(PackLimits, APatchScaleTheRuntimeCannotSumIsRefused) {
+  // Patch 0 is the base map's (groups sorted by kind): its factor is 1. A scale of 1e38 made
+  // recompose fail with a non-finite texel after verify had accepted it.
   Edited big(
       [](uint8_t* d) { record<pack::PatchRecord>(d, pack::kSectionPatches, 0)->scale = 1e38f; });
-  PackView view;
   std::string m;
-  EXPECT_EQ(big.open(RecomposeLimits(), &m, &view), Status::kOverLimit);
-  EXPECT_NE(m.find("patch 0"), std::string::npos) << m;
-  EXPECT_NE(m.find("max_texel_value"), std::string::npos) << m;
-  EXPECT_FALSE(view.valid());
+  EXPECT_EQ(authored_bound(big, &m), Status::kOutOfRange);
+  EXPECT_NE(m.find("the authored light map could reach 1e+38, beyond the 1e+36 the runtime opens"),
+            std::string::npos)
+      << m;
 
-  // At the limit: accepted, and the CPU recomposer's map stays finite.
-  Edited edge(
-      [](uint8_t* d) { record<pack::PatchRecord>(d, pack::kSectionPatches, 0)->scale = 65504.0f; });
-  ASSERT_EQ(edge.open(RecomposeLimits(), &m, &view), Status::kOk) << m;
+  // Bright but within the bound: accepted, and the CPU recomposer's map stays finite.
+  Edited bright(
+      [](uint8_t* d) { record<pack::PatchRecord>(d, pack::kSectionPatches, 0)->scale = 1e30f; });
+  ASSERT_EQ(authored_bound(bright, &m), Status::kOk) << m;
+  PackView view;
+  ASSERT_EQ(bright.open(RecomposeLimits(), &m, &view), Status::kOk) << m;
   SceneState state;
   CpuRecomposer recomposer;
   ASSERT_EQ(state.init(view, nullptr), Status::kOk);
   ASSERT_EQ(recomposer.init(view, nullptr), Status::kOk);
-  recomposer.rebuild(state);
+  ASSERT_EQ(recomposer.rebuild(state), Status::kOk);
   const float* rgb = recomposer.rgb();
   float peak = 0.0f;
   for (uint64_t i = 0; i < uint64_t(view.lightmap_width()) * view.lightmap_height() * 3; ++i) {
     ASSERT_TRUE(std::isfinite(rgb[i])) << "texel value " << i;
-    peak = std::max(peak, std::fabs(rgb[i]));
+    peak = std::max(peak, rgb[i]);
   }
-  EXPECT_GT(peak, 1000.0f);  // the raised scale reached the map
+  EXPECT_GT(peak, 1e28f);  // the raised scale reached the map
 }
 
-TEST(PackLimits, AScaleTimesItsAuthoredLightPastTheRangeIsRefused) {
-  // Light 0 authored at intensity 1e30: every patch of its groups adds scale x 1e30.
-  Edited bright(
-      [](uint8_t* d) { record<pack::LightRecord>(d, pack::kSectionLights, 0)->intensity = 1e30f; });
-  PackView view;
+TEST(PackLimits, ALightAuthoredPastTheBoundIsRefused) {
+  Edited brightest(
+      [](uint8_t* d) { record<pack::LightRecord>(d, pack::kSectionLights, 0)->intensity = 3e38f; });
   std::string m;
-  EXPECT_EQ(bright.open(RecomposeLimits(), &m, &view), Status::kOverLimit);
-  EXPECT_NE(m.find("with its light as authored"), std::string::npos) << m;
-  RecomposeLimits raised;
-  raised.max_texel_value = 3e38f;
-  EXPECT_EQ(bright.open(raised, &m, &view), Status::kOk) << m;
+  EXPECT_EQ(authored_bound(brightest, &m), Status::kOutOfRange);
+  EXPECT_NE(m.find("beyond the 1e+36 the runtime opens"), std::string::npos) << m;
 }
 
 TEST(PackLimits, ALightMapPastTheStatedMemoryIsRefusedBeforeAnyAllocation) {

@@ -167,6 +167,11 @@ TEST(HostileTool, VerifyRefusesWhatTheRuntimeCannotRecompose) {
     auto* h = reinterpret_cast<pack::Header*>(d);
     h->lightmap_width = h->lightmap_height = pack::kMaxLightmapSize;
   });
+  const std::string wide_map = edited_pack(c.dir, c.pack, "wide.lpk", [](std::uint8_t* d) {
+    auto* h = reinterpret_cast<pack::Header*>(d);
+    h->lightmap_width = 4097;
+    h->lightmap_height = 4096;
+  });
   const std::string not_utf8 = edited_pack(c.dir, c.pack, "utf8.lpk", [](std::uint8_t* d) {
     const auto* l = section_record<pack::LightRecord>(d, pack::kSectionLights, 0);
     section_record<std::uint8_t>(d, pack::kSectionStrings, 0)[l->name_offset] = 0xFF;
@@ -179,32 +184,27 @@ TEST(HostileTool, VerifyRefusesWhatTheRuntimeCannotRecompose) {
                                  : std::vector<std::string>{verb, pack};
     };
     expect_refusal(c.dir, args(huge_scale),
-                   {"over limit: patch 0 (base): scale 1e+38", "over the limit of 65504",
-                    "(--max-texel-value V raises it)"});
+                   {"out of range: the authored light map could reach 1e+38, beyond the 1e+36 "
+                    "the runtime opens (no option raises it"});
     expect_refusal(c.dir, args(huge_map),
                    {"light map 16384x16384 is 268435456 texels, over the limit of 16777216",
                     "(--max-lightmap-texels N raises it)"});
     expect_refusal(c.dir, args(not_utf8), {"corrupt: light 0: name is not valid UTF-8"});
   }
   expect_refusal(c.dir, {"info", not_utf8, "--json"}, {"not valid UTF-8"});
-  // Raised limits: accepted (verify only reads the tables, nothing is allocated for the map).
-  expect_success({"verify", huge_map, "--max-lightmap-texels", "268435456"});
-  expect_success({"verify", huge_scale, "--max-texel-value", "3e38"});
+  // One texel column over the default, then accepted with the limit raised.
+  expect_refusal(c.dir, {"verify", wide_map}, {"(--max-lightmap-texels N raises it)"});
+  expect_success({"verify", wide_map, "--max-lightmap-texels", "16781312"});
 }
 
-TEST(HostileTool, ACookOverTheRuntimesLimitsWarnsAndVerifyRefusesIt) {
+TEST(HostileTool, ACookTheRuntimeWouldRefuseIsNotWritten) {
   ScratchDir dir;
   GltfParts p = parts_of(small_room());
-  p.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = 1e9;  // the lamp
+  p.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = 1e37;  // the lamp
   const std::string scene = write_glb(dir, "bright", p);
-  const std::string pack = dir.file("bright.lpk");
-  const ToolRun cook = expect_success(cat({"cook", scene, "-o", pack}, kFast));
-  EXPECT_NE(cook.err.find("warning: the pack is over the runtime's default limits"),
-            std::string::npos)
-      << cook.err;
-  EXPECT_NE(cook.err.find("--max-texel-value V raises it"), std::string::npos) << cook.err;
-  expect_refusal(dir, {"verify", pack}, {"max_texel_value"});
-  expect_success({"verify", pack, "--max-texel-value", "3e38"});
+  expect_refusal(dir, cat({"cook", scene, "-o", dir.file("bright.lpk")}, kFast),
+                 {"the cooked pack is one the runtime refuses: out of range",
+                  "beyond the 1e+36 the runtime opens"});
 }
 
 TEST(HostileTool, InfoPrintsNamesEscaped) {
@@ -257,8 +257,7 @@ TEST(HostileTool, EveryLimitIsDocumentedInHelpAndReadme) {
   const std::vector<std::string> scene_limits = {
       "--max-triangles N",      "4000000",  "--max-vertices N", "12000000",
       "--max-texture-pixels N", "33554432", "--uri-root DIR"};
-  const std::vector<std::string> pack_limits = {"--max-lightmap-texels N", "16777216",
-                                                "--max-texel-value V", "65504"};
+  const std::vector<std::string> pack_limits = {"--max-lightmap-texels N", "16777216", "1e36"};
   const std::vector<std::string> input_limit = {"--max-input-mb N", "1024"};
   for (const std::string verb :
        {"cook", "bake-state", "accuracy", "info", "verify", "recompose", "bench"}) {

@@ -8,7 +8,6 @@
 #pragma once
 
 #include <cstdint>
-#include <limits>
 
 #include "lightpatch/pack_format.h"
 #include "lightpatch/status.h"
@@ -16,24 +15,19 @@
 namespace lightpatch {
 
 // What a pack may ask of a recomposer beyond the format's own ranges (pack_format.h).
-// PackView::open refuses (Status::kOverLimit) a pack over them, so that `lightpatch verify` accepts
-// exactly what the recomposers can rebuild; a game on a device with more memory passes larger ones.
+// PackView::open refuses (Status::kOverLimit) a pack over them before anything is allocated for it,
+// so that `lightpatch verify` accepts what the recomposers can hold; a game on a device with more
+// memory passes larger ones. (How bright a pack may be is the planner's check_authored_map_bound.)
 struct RecomposeLimits {
-  // Light-map texels. The GLES runtime holds two RGBA16F maps (8 bytes a texel each: 256 MiB at
-  // the default), the CPU recomposer and the runtime's CPU fallback two float RGB maps (12 bytes a
-  // texel each: 384 MiB).
+  // Light-map texels. The GLES runtime holds the sampled RGBA16F map and an accumulator (RGBA32F
+  // or RGBA16F, or double RGB on its CPU path): 16 to 32 bytes a texel, 256 to 512 MiB at the
+  // default; the CPU recomposer two float RGB maps, 384 MiB.
   uint64_t max_lightmap_texels = uint64_t(4096) * 4096;
-  // The most one patch may add to a texel: its scale (a light at colour 1 and intensity 1), and
-  // its scale times its light's authored colour x intensity (1 for base and static-shadow
-  // patches). 65504 is the largest finite half float, the GLES runtime's target format.
-  float max_texel_value = 65504.0f;
 
-  // No limit beyond the format's own ranges (the cooker's check of what it wrote, tools that
-  // only read a pack's tables).
+  // No limit beyond the format's own ranges (the cooker's check of what it wrote).
   static RecomposeLimits format_only() {
     RecomposeLimits l;
     l.max_lightmap_texels = uint64_t(pack::kMaxLightmapSize) * pack::kMaxLightmapSize;
-    l.max_texel_value = std::numeric_limits<float>::infinity();
     return l;
   }
 };
@@ -49,7 +43,8 @@ class PackView {
  public:
   PackView() = default;
 
-  // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give) and on
+  // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give; for bytes
+  // that may not be, e.g. an APK asset's 4-byte alignment, use PackMemory) and on
   // success fills *out. On failure returns the error and fills *error (if non-null) with a
   // message naming the problem; *out is left empty. A valid pack over `limits` gives kOverLimit
   // with a message naming the RecomposeLimits field.

@@ -18,6 +18,7 @@ enum class Status : int32_t {
   kGlError,           // the GL driver reported an error
   kNotFound,          // a name lookup failed
   kOverLimit,         // valid, but asks for more than the stated limits (RecomposeLimits)
+  kOutOfRange,        // a value the light map cannot represent (see Runtime::set_light)
 };
 
 const char* status_name(Status status);

@@ -110,7 +110,7 @@ class Validator {
   Status fail(Status s, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
   Status check_name(const char* what, uint32_t index, uint32_t offset, uint32_t length,
                     bool allow_empty);
-  Status check_limits(const Parsed& p);
+  Status check_limits(const Header& h);
   template <typename T>
   const T* at(uint64_t offset) const {
     return reinterpret_cast<const T*>(b_ + offset);
@@ -151,34 +151,13 @@ Status Validator::check_name(const char* what, uint32_t index, uint32_t offset, 
   return Status::kOk;
 }
 
-Status Validator::check_limits(const Parsed& p) {
-  const Header& h = *p.header;
+Status Validator::check_limits(const Header& h) {
   const uint64_t texels = uint64_t(h.lightmap_width) * h.lightmap_height;
   if (texels > limits_.max_lightmap_texels) {
     return fail(Status::kOverLimit,
                 "light map %ux%u is %llu texels, over the limit of %llu (max_lightmap_texels)",
                 h.lightmap_width, h.lightmap_height, static_cast<unsigned long long>(texels),
                 static_cast<unsigned long long>(limits_.max_lightmap_texels));
-  }
-  for (uint32_t i = 0; i < h.patch_count; ++i) {
-    const PatchRecord& r = p.patches[i];
-    const GroupRecord& g = p.groups[r.group];
-    float factor = 1.0f;
-    if (g.light != kNone16) {
-      const LightRecord& l = p.lights[g.light];
-      const float c = l.color[0] > l.color[1] ? (l.color[0] > l.color[2] ? l.color[0] : l.color[2])
-                                              : (l.color[1] > l.color[2] ? l.color[1] : l.color[2]);
-      factor = c * l.intensity;
-    }
-    // Both finite and >= 0 (checked): the product is >= 0, possibly +inf, never NaN.
-    const float value = r.scale * factor;
-    if (!(r.scale <= limits_.max_texel_value) || !(value <= limits_.max_texel_value)) {
-      return fail(Status::kOverLimit,
-                  "patch %u (%s): scale %g, %g with its light as authored, over the limit of %g "
-                  "(max_texel_value)",
-                  i, group_kind_name(g.kind), double(r.scale), double(value),
-                  double(limits_.max_texel_value));
-    }
   }
   return Status::kOk;
 }
@@ -506,12 +485,7 @@ Status Validator::run(Parsed* out) {
     }
   }
 
-  Parsed checked;
-  checked.header = &h;
-  checked.lights = lights;
-  checked.groups = groups;
-  checked.patches = patches;
-  if (Status s = check_limits(checked); s != Status::kOk) return s;
+  if (Status s = check_limits(h); s != Status::kOk) return s;
 
   out->header = &h;
   out->lights = lights;

@@ -31,6 +31,8 @@ const char* status_name(Status status) {
       return "not found";
     case Status::kOverLimit:
       return "over limit";
+    case Status::kOutOfRange:
+      return "out of range";
   }
   return "unknown";
 }
