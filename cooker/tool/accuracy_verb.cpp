@@ -809,13 +809,7 @@ int verb_accuracy(Args& args) {
       Report report;
       fresh.maps = bake_maps(scene, prepared->layout, prepared->texels, *tracer, setting.bake,
                              silent, report);
-      finalize_map(fresh.maps.base, scene, prepared->layout, prepared->texels);
-      for (FloatImage& c : fresh.maps.contribution) {
-        finalize_map(c, scene, prepared->layout, prepared->texels);
-      }
-      for (ShadowMap& s : fresh.maps.shadows) {
-        finalize_map(s.map, scene, prepared->layout, prepared->texels);
-      }
+      finalize_maps(fresh.maps, scene, prepared->layout, prepared->texels);
       fresh.seconds = since(t);
       fresh.rays = tracer->rays_traced() - rays0;
       fresh.setting = setting;

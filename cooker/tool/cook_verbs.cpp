@@ -13,6 +13,7 @@
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/cook.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/gltf_writer.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/io.h"
 #include "lightpatch/cooker/pack_builder.h"
@@ -24,6 +25,7 @@
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
 #include "limit_options.h"
+#include "preview_image.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -52,6 +54,17 @@ CookOptions parse_common(Args& args, const char* output_what) {
   if (o.output.empty()) throw ArgsError("-o needs a file name");
   o.layout.lightmap_size = args.int_option("--lightmap-size", 0, 8, 16384);
   o.layout.texels_per_unit = args.float_option("--texels-per-unit", 0.0f, 1e-6f, 1e6f);
+  std::string unwrap;
+  if (args.option("--unwrap", &unwrap)) {
+    if (unwrap == "auto")
+      o.layout.unwrap = UnwrapMode::kAuto;
+    else if (unwrap == "always")
+      o.layout.unwrap = UnwrapMode::kAlways;
+    else if (unwrap == "never")
+      o.layout.unwrap = UnwrapMode::kNever;
+    else
+      throw ArgsError("--unwrap takes auto, always or never, not '" + unwrap + "'");
+  }
   std::string quality;
   if (args.option("--quality", &quality)) {
     try {
@@ -77,6 +90,7 @@ CookOptions parse_common(Args& args, const char* output_what) {
     throw ArgsError("--indirect-level must be 1, 2, 4 or 8");
   o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
+  o.bake.texel_samples = args.int_option("--texel-samples", 0, 1, 256);
   o.bake.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.bake.threads = args.int_option("--threads", 0, 1, 1024);
   o.bake.plan_effects = !args.flag("--no-plan");
@@ -144,6 +158,8 @@ void measure_plan(const CookOptions& o, const PreparedScene& p, Progress& progre
 
 int verb_cook(Args& args) {
   const bool measure = args.flag("--measure-plan");
+  std::string gltf_path;
+  args.option("--write-gltf", &gltf_path);
   CookOptions o = parse_common(args, "OUT.lpk");
   o.scene_path = args.positional("SCENE");
   args.finish();
@@ -156,9 +172,10 @@ int verb_cook(Args& args) {
         "gather");
   }
   const auto t0 = std::chrono::steady_clock::now();
-  check_command_files({o.scene_path}, {o.output, o.report_path});
+  check_command_files({o.scene_path}, {o.output, o.report_path, gltf_path});
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  if (!gltf_path.empty()) probe_output_folder(gltf_path);
   Progress progress(o.quiet);
   Report report;
   const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report, o.import);
@@ -168,6 +185,10 @@ int verb_cook(Args& args) {
     std::fprintf(stderr, "lightpatch cook: warning: %s\n", w.c_str());
   progress.begin("write", 1);
   write_file_atomic(o.output, pack.data(), pack.size());
+  if (!gltf_path.empty()) {
+    const std::vector<uint8_t> glb = gltf_with_lightmap_uvs(o.scene_path, p.scene, p.layout);
+    write_file_atomic(gltf_path, glb.data(), glb.size());
+  }
   report.stage_time("write", progress.end());
   const double cook_s = since(t0);
   progress.message("wrote " + o.output + " (" + std::to_string(pack.size()) + " bytes, " +
@@ -202,6 +223,9 @@ int verb_bake_state(Args& args) {
   const bool has_std_error = args.option("--std-error", &std_error_out);
   const float target_percent = args.float_option("--target-noise", 0.0f, 1e-3f, 100.0f);
   ref.target_noise = 0.01 * target_percent;
+  const PreviewOptions picture = parse_preview_options(args, "--png");
+  if (picture.view == PreviewView::kAtlases)
+    throw ArgsError("--view atlases shows a pack's atlases: use lightpatch preview");
   CookOptions o = parse_common(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
@@ -215,9 +239,11 @@ int verb_bake_state(Args& args) {
     if (std_error_out == o.output) throw ArgsError("--std-error names the map itself");
   }
   const auto t0 = std::chrono::steady_clock::now();
-  check_command_files({o.scene_path, state_path}, {o.output, o.report_path});
+  check_command_files({o.scene_path, state_path},
+                      {o.output, o.report_path, picture.png, reference ? std_error_out : ""});
   const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
   probe_output_folder(o.output);
+  if (!picture.png.empty()) probe_output_folder(picture.png);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   if (reference) probe_output_folder(std_error_out);
   Progress progress(o.quiet);
@@ -227,6 +253,7 @@ int verb_bake_state(Args& args) {
   if (reference) {
     ref.seed = o.bake.seed;
     ref.threads = o.bake.threads;
+    ref.texel_patch = o.bake.texel_samples != 1;
     ReferenceBake rb = cook_reference_state(p, state, ref, progress, report);
     progress.message("reference: " + std::to_string(rb.samples) + " samples, " +
                      std::to_string(rb.rays) + " rays, mean relative standard error " +
@@ -240,6 +267,7 @@ int verb_bake_state(Args& args) {
   progress.begin("write", 1);
   write_pfm(o.output, map);
   if (reference) write_pfm(std_error_out, std_error);
+  if (!picture.png.empty()) write_preview(picture, map, layout_charts(p.scene, p.layout), nullptr);
   report.stage_time("write", progress.end());
   finish_report(o, report, since(t0));
   progress.message("wrote " + o.output + (reference ? " and " + std_error_out : std::string()) +

@@ -23,7 +23,13 @@ constexpr const char* kCookOptionsHelp =
     "  --lightmap-size N      light-map page width in texels (8..16384); the density follows\n"
     "  --texels-per-unit F    texel density in texels per metre (default: about 160k surface\n"
     "                         texels, a page near 512x512; lowered with a note if the charts do\n"
-    "                         not fit a 4096 page)\n"
+    "                         not fit a 4096 page); a node's extras \"lightmapScale\": k\n"
+    "                         multiplies it for that node's meshes\n"
+    "  --unwrap MODE          where light-map UVs come from: auto (default: each node's own\n"
+    "                         TEXCOORD_1 in [0,1] where all its meshes have one, placed by a\n"
+    "                         scale and offset, or one TEXCOORD_1 layout over the whole scene;\n"
+    "                         the cooker unwraps the other nodes), always (ignore TEXCOORD_1),\n"
+    "                         never (every mesh must have TEXCOORD_1)\n"
     "  --quality Q            draft | preview (default) | production: gather rays, indirect\n"
     "                         level and denoising, area-light samples\n"
     "  --no-indirect          direct light only (no bounce)\n"
@@ -42,17 +48,44 @@ constexpr const char* kCookOptionsHelp =
     "                         patches kept at 3 channels (for bake-state: every object's bounce)\n"
 
     "  --area-samples N       samples per texel for lights with a radius and emissive surfaces\n"
+    "  --texel-samples N      points of each texel's surface patch that direct light is averaged\n"
+    "                         over (anti-aliased shadow edges); 1 = the texel's sample point\n"
+    "                         (preset: draft 1, preview 4, production 9; for bake-state\n"
+    "                         --integrator reference, 1 samples the point, otherwise the patch)\n"
     "  --seed N               random seed (same scene, options and seed: same maps)\n"
     "  --threads N            worker threads (default: all cores)\n"
     "  --report REPORT.json   write the cook's decisions, timings and measured errors\n"
     "  -q, --quiet            no progress on stderr\n";
 
+// The picture options of `preview` and `bake-state --png` (preview_image.h).
+#define LIGHTPATCH_PREVIEW_HELP                                                                   \
+  "  --view V               lightmap (default): the light map tone-mapped to sRGB, the 99th\n"    \
+  "                         percentile white, negative texels magenta; atlases (preview only):\n" \
+  "                         every atlas's R, G, B and A planes in grey, side by side; charts:\n"  \
+  "                         each mesh instance's charts in a colour of its own (semi-dynamic\n"   \
+  "                         objects saturated, static meshes pale) shaded by the light;\n"        \
+  "                         checker: the same colours in a texel checker, a texture that shows\n" \
+  "                         the texel density on a model through its light-map UVs\n"             \
+  "  --exposure E           factor on the automatic exposure (default 1)\n"                       \
+  "  --zoom N               pixels per texel, 1..16 (default 1)\n"
+constexpr const char* kPreviewHelp =
+    "Writes a picture of what a pack holds (PNG), from the CPU reference recomposition.\n\n"
+    "options:\n"
+    "  -o, --output OUT.png   the picture (written atomically)\n"
+    "  --state STATE.json     the state to recompose (default: as "
+    "authored)\n" LIGHTPATCH_PREVIEW_HELP;
+
 constexpr const char* kCookHelp =
     "Bakes a glTF 2.0 scene (.gltf/.glb) into a pack: base map, per-light contribution maps,\n"
     "per-object shadow maps and pair corrections, quantized to 8-bit RGBA atlases.\n"
-    "Lights and mesh nodes with extras {\"semiDynamic\": true} become switchable.\n\n"
+    "Lights and mesh nodes with extras {\"semiDynamic\": true} (or 1, as Blender writes it)\n"
+    "become switchable; a mesh node with {\"lightmapExclude\": true} casts shadows but gets no\n"
+    "light map.\n\n"
     "options:\n"
     "  -o, --output OUT.lpk   the pack (written atomically; an existing file survives a failure)\n"
+    "  --write-gltf OUT.glb   also the scene written back with the light-map UVs the cook used\n"
+    "                         in TEXCOORD_1 (uncompressed; buffers and images embedded), so any\n"
+    "                         glTF loader draws it with the runtime's light map\n"
     "  --measure-plan         after the cook, bake and pack twice more, not written: with\n"
     "                         --no-plan, then as planned (both timed warm), and add to the\n"
     "                         report a \"plan\" object: seconds, rays, bytes and\n"
@@ -79,7 +112,9 @@ constexpr const char* kBakeStateHelp =
     "  --std-error ERR.pfm    reference: where the standard-error map goes (RGB, same units\n"
     "                         and layout as the map; default MAP.stderr.pfm beside MAP.pfm)\n"
     "  (with --integrator reference, --seed and --threads apply; the quality, gather, denoise\n"
-    "  and area-sample options do not)\n";
+    "  and area-sample options do not)\n"
+    "  --png OUT.png          also a picture of the map (the options "
+    "below)\n" LIGHTPATCH_PREVIEW_HELP;
 
 constexpr const char* kAccuracyHelp =
     "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
@@ -135,8 +170,10 @@ const Verb kVerbs[] = {
     {"cook", lightpatch::tool::verb_cook,
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
-     "[--measure-plan] [--integrator gather] [--gather-rays N] [--indirect-level K] "
-     "[--denoise N] [--area-samples N] [--seed N] [--threads N] [--quiet]",
+     "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
+     "[--gather-rays N] [--indirect-level K] [--denoise N] [--area-samples N] [--texel-samples N] "
+     "[--seed N] "
+     "[--threads N] [--quiet]",
      kCookHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
      "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator gather|reference] "
@@ -157,6 +194,10 @@ const Verb kVerbs[] = {
      "  --states STATES.jsonl  states applied in order through the incremental path; the map\n"
      "                         after the last is written\n"
      "  --backend cpu|gles     CPU reference (default) or OpenGL ES 3 through EGL surfaceless\n"},
+    {"preview", lightpatch::tool::verb_preview,
+     "preview PACK [--state STATE.json] -o OUT.png [--view lightmap|atlases|charts|checker] "
+     "[--exposure E] [--zoom N]",
+     kPreviewHelp},
     {"bench", lightpatch::tool::verb_bench, "bench PACK [--json]",
      "Times the GLES recomposition of a pack (full rebuild, single changes) against a fill-rate\n"
      "floor measured in the same run, and lists the GPU memory it holds.\n\n"

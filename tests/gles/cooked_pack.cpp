@@ -24,9 +24,7 @@ void cook_draft(CookedPack& c, float texels_per_unit) {
   BakeOptions options;
   options.quality = Quality::kDraft;
   BakedMaps maps = bake_maps(c.scene, c.layout, c.texels, *c.tracer, options, progress, report);
-  finalize_map(maps.base, c.scene, c.layout, c.texels);
-  for (FloatImage& m : maps.contribution) finalize_map(m, c.scene, c.layout, c.texels);
-  for (ShadowMap& s : maps.shadows) finalize_map(s.map, c.scene, c.layout, c.texels);
+  finalize_maps(maps, c.scene, c.layout, c.texels);
   c.bytes = build_pack(c.scene, c.layout, maps, PackOptions{}, report);
   Error error;
   ASSERT_EQ(PackView::open(c.bytes.data(), c.bytes.size(), &c.pack, &error), Status::kOk)

@@ -260,7 +260,7 @@ TEST(HostileTool, EveryLimitIsDocumentedInHelpAndReadme) {
   const std::vector<std::string> pack_limits = {"--max-lightmap-texels N", "16777216", "1e36"};
   const std::vector<std::string> input_limit = {"--max-input-mb N", "1024"};
   for (const std::string verb :
-       {"cook", "bake-state", "accuracy", "info", "verify", "recompose", "bench"}) {
+       {"cook", "bake-state", "accuracy", "info", "verify", "recompose", "bench", "preview"}) {
     SCOPED_TRACE(verb);
     const ToolRun help = expect_success({verb, "--help"});
     const bool imports = verb == "cook" || verb == "bake-state" || verb == "accuracy";

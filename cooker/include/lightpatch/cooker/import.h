@@ -1,5 +1,6 @@
 // glTF 2.0 import (.gltf, .glb): tinygltf, KHR_draco_mesh_compression, KHR_lights_punctual,
-// KHR_materials_emissive_strength, extras.semiDynamic / extras.lightRadius.
+// KHR_materials_emissive_strength, node extras semiDynamic, lightRadius, lightmapScale and
+// lightmapExclude (booleans as true/false or Blender's 1/0).
 #pragma once
 
 #include <cstddef>
@@ -36,8 +37,9 @@ constexpr const char* kUriRootOption = "--uri-root";
 // Reads and validates a scene. Throws CookError with a message naming the problem (file, node,
 // mesh, accessor) on any bad input: unreadable file, invalid JSON, NaN/Inf, indices out of range,
 // missing buffers, zero-area-only meshes, unsupported required extensions, duplicate or missing
-// names of semi-dynamic nodes, invalid TEXCOORD_1, a scene over `limits`, a buffer or image file
-// outside the scene's folder and limits.uri_roots. Files are read with io.h's read_file.
+// names of semi-dynamic nodes, invalid TEXCOORD_1, extras of the wrong type, a scene over
+// `limits`, a buffer or image file outside the scene's folder and limits.uri_roots. Files are read
+// with io.h's read_file.
 Scene import_gltf(const std::string& path, const ImportLimits& limits = {});
 
 // The same from `size` bytes in memory (.glb when they start with "glTF", else .gltf JSON); `name`
