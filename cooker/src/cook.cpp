@@ -63,8 +63,8 @@ PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress&
 }
 
 PreparedScene prepare_scene(const std::string& path, const LayoutOptions& options,
-                            Progress& progress, Report& report) {
-  Scene scene = timed(progress, report, "import", [&] { return import_gltf(path); });
+                            Progress& progress, Report& report, const ImportLimits& limits) {
+  Scene scene = timed(progress, report, "import", [&] { return import_gltf(path, limits); });
   {
     std::lock_guard<std::mutex> lock(report.mutex());
     report.root()["scene"]["path"] = path;
