@@ -190,9 +190,10 @@ Compared compare_state(Cooked& c, CpuRecomposer& cpu, const NamedState& st) {
   EXPECT_EQ(cpu.apply(state), Status::kOk);
   Progress progress(true);
   Report report;
-  FloatImage want =
-      bake_state(c.scene, c.layout, c.texels, *c.tracer, st.spec, c.options, progress, report);
-  finalize_map(want, c.scene, c.layout, c.texels);
+  FloatImage blocks;
+  FloatImage want = bake_state(c.scene, c.layout, c.texels, *c.tracer, st.spec, c.options, progress,
+                               report, &blocks);
+  finalize_map(want, blocks, c.scene, c.layout, c.texels);
   expect_finite(want, "bake_state " + st.name);
   const size_t n = size_t(cpu.width()) * cpu.height() * 3;
   size_t bad = 0;

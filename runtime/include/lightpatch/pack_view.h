@@ -32,7 +32,8 @@ namespace lightpatch {
 struct RecomposeLimits {
   // Light-map texels. The GLES runtime holds the sampled RGBA16F map and an accumulator (RGBA32F
   // or RGBA16F, or double RGB on its CPU path): 16 to 32 bytes a texel, 256 to 512 MiB at the
-  // default; the CPU recomposer two float RGB maps, 384 MiB.
+  // default; the CPU recomposer two float RGB maps, 384 MiB. An indirect map adds at most a
+  // quarter of that (scale >= 2), which this limit leaves to the light map's margin.
   uint64_t max_lightmap_texels = uint64_t(4096) * 4096;
 
   // No limit beyond the format's own ranges (the cooker's check of what it wrote).
