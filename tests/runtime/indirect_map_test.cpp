@@ -67,7 +67,8 @@ TEST(IndirectMap, PacksWithAnIndirectMapOpenAtEveryScale) {
     EXPECT_LT(indirect, v.patch_count());
   }
   PackView plain;
-  ASSERT_EQ(open_message(make_synthetic_pack(SyntheticOptions{}), &plain), "");
+  const SyntheticPack plain_bytes = make_synthetic_pack(SyntheticOptions{});  // outlives the view
+  ASSERT_EQ(open_message(plain_bytes, &plain), "");
   EXPECT_FALSE(plain.has_indirect_map());
   EXPECT_EQ(plain.indirect_width(), 0u);
   EXPECT_EQ(plain.map_texels(), 48u * 40u);
