@@ -25,6 +25,9 @@ struct PackOptions {
   // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step
   // (the effect plan forced on, `cook --no-plan`).
   bool keep_colour = false;
+  // Store every light group that has an indirect part split into its indirect-map and light-map
+  // parts, whatever it costs (otherwise chosen per light group by atlas texels).
+  bool always_split = false;
 };
 
 // Builds the pack bytes. Statistics and the encoding decision go into `report`.
