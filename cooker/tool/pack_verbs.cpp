@@ -77,6 +77,10 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["version"] = p.header().version;
   j["bytes"] = p.size();
   j["lightmap"] = {{"width", p.lightmap_width()}, {"height", p.lightmap_height()}};
+  // 0 x 0 and scale 0 without one (pack_format.h, "Two target maps").
+  j["indirect_map"] = {{"width", p.indirect_width()},
+                       {"height", p.indirect_height()},
+                       {"scale", p.indirect_scale()}};
   nlohmann::ordered_json lights = nlohmann::ordered_json::array();
   for (uint32_t i = 0; i < p.light_count(); ++i) {
     const pack::LightRecord& l = p.light(i);
@@ -89,7 +93,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["lights"] = lights;
   j["objects"] = objects;
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
-                                         square = 0;
+                                         square = 0, indirect = 0;
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
     const pack::PatchRecord& r = p.patch(i);
     by_kind[p.group(r.group).kind]++;
@@ -97,6 +101,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
     negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
     one_channel += r.channel_count == 1 ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
+    indirect += r.target == pack::kTargetIndirectMap ? 1 : 0;
   }
   j["groups"] = p.group_count();
   j["patches"] = {{"total", p.patch_count()},
@@ -109,6 +114,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                   {"one_channel", one_channel},
                   {"three_channel", p.patch_count() - one_channel},
                   {"square_encoded", square},
+                  {"indirect_map", indirect},
                   {"channel_texels", texels}};
   nlohmann::ordered_json atlases = nlohmann::ordered_json::array();
   uint64_t atlas_bytes = 0;
@@ -210,6 +216,12 @@ int verb_info(Args& args) {
   std::printf("%s: lightpatch pack v%u, %llu bytes\n", cooker::printable(path, SIZE_MAX).c_str(),
               pack.view.header().version, static_cast<unsigned long long>(pack.view.size()));
   std::printf("light map      %ux%u\n", pack.view.lightmap_width(), pack.view.lightmap_height());
+  if (pack.view.has_indirect_map()) {
+    std::printf(
+        "indirect map   %ux%u (1/%u of the light map per axis), %llu patches draw into it\n",
+        pack.view.indirect_width(), pack.view.indirect_height(), pack.view.indirect_scale(),
+        pt["indirect_map"].get<unsigned long long>());
+  }
   std::printf("lights         %u\n", pack.view.light_count());
   for (const auto& l : j["lights"]) {
     std::printf("  %s  colour (%g, %g, %g)  intensity %g\n",
