@@ -25,7 +25,7 @@ glm::vec3 surface_albedo(const Scene& scene, const MeshInstance& mesh, uint32_t 
       }
     }
   }
-  for (int c = 0; c < 3; ++c) a[c] = a[c] > 0.0f ? std::min(a[c], 1.0f) : 0.0f;
+  for (int c = 0; c < 3; ++c) a[c] = a[c] > 0.0f ? std::min(a[c], kMaxAlbedo) : 0.0f;
   return a;
 }
 

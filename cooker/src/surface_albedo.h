@@ -10,10 +10,17 @@
 
 namespace lightpatch::cooker {
 
+// At most this much light is reflected: a closed room of albedo 1 (glTF's default material is
+// white, and Blender exports meshes without a material with it) would keep its light forever,
+// and its bounce series never converges (the decomposition then differed from bake-state by
+// 21 % on such a room). At 0.99 the series' tail after its 1024 bounces is under 0.4 %.
+constexpr float kMaxAlbedo = 0.99f;
+
 // The base colour factor times the base colour texture at TEXCOORD_0 (nearest texel, repeat
-// wrap, glTF's default sampler), each channel clamped to [0, 1] (above 1 would create energy;
-// NaN reflects nothing). Meshes without a material get 0.8 grey. At the point of the triangle of
-// vertices i0, i1, i2 of `mesh` with barycentrics u (of i1) and v (of i2); indices < vertex count.
+// wrap, glTF's default sampler), each channel clamped to [0, kMaxAlbedo] (above 1 would create
+// energy; NaN reflects nothing). Meshes without a material get 0.8 grey. At the point of the
+// triangle of vertices i0, i1, i2 of `mesh` with barycentrics u (of i1) and v (of i2); indices <
+// vertex count.
 glm::vec3 surface_albedo(const Scene& scene, const MeshInstance& mesh, uint32_t i0, uint32_t i1,
                          uint32_t i2, float u, float v);
 // The same at a ray's hit. Precondition: `hit.hit`, its mesh and triangle in `scene`.
