@@ -2,6 +2,8 @@
 // a double, keys and values meant to flood stderr. Each gets a CookError naming the file.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <string>
 
 #include "gltf_files.h"
@@ -16,6 +18,7 @@ std::string state_error(const std::string& text) {
     cooker::parse_state_json(text, "hostile.json");
     ADD_FAILURE() << "accepted: " << text.substr(0, 200);
   } catch (const cooker::CookError& e) {
+    std::printf("refused: %s\n", e.what());  // the closing note lists each case's message
     return e.what();
   }
   return {};

@@ -5,9 +5,11 @@
 // (for a limit: the limit and the option that raises it); nothing is overwritten or left behind.
 // Also: every limit is documented in --help and the README.
 #include <gtest/gtest.h>
+
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <cstdio>
 
 #include <cstring>
 #include <filesystem>
@@ -38,6 +40,7 @@ ToolRun expect_refusal(const ScratchDir& dir, const std::vector<std::string>& ar
       kept.empty() ? std::vector<std::uint8_t>() : read_bytes(kept);
   const ToolRun r = run_tool(args);
   const std::string what = describe(args, r);
+  std::printf("refused: %s", r.err.c_str());  // the closing note lists each case's message
   EXPECT_EQ(r.code, 1) << what;
   for (const std::string& w : words)
     EXPECT_NE(r.err.find(w), std::string::npos) << "'" << w << "' not in stderr: " << what;
