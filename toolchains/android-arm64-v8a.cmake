@@ -1,8 +1,10 @@
 # Android, arm64-v8a, GLES 3 + EGL, through the Android NDK's own toolchain file. Builds the
 # runtime with its GLES recomposer and the platform's EGL layer (-DLIGHTPATCH_DEVICE=ON is implied:
-# the cooker and the samples are host tools), plus the runtime's CPU tests as executables to push
-# to a device (adb push; they need no GPU). The NDK is not a Debian package, so this file is not
-# exercised by ./run test on this machine: point it at your NDK with
+# the cooker and the samples are host tools), plus the runtime's tests as executables to push to
+# a device (adb push; runtime_tests need no GPU, gles_tests need EGL and GLES 3). The NDK is not a
+# Debian package and cannot be installed here, so this file has never been built on this machine
+# (./run test builds the same LIGHTPATCH_DEVICE configuration for aarch64 Linux with Debian's
+# arm64 Mesa and runs it under qemu instead): point it at your NDK with
 #   cmake -S . -B build-android -G Ninja -DCMAKE_TOOLCHAIN_FILE=toolchains/android-arm64-v8a.cmake \
 #         -DANDROID_NDK=/path/to/android-ndk [-DANDROID_PLATFORM=android-24]
 # (or set ANDROID_NDK_HOME / ANDROID_NDK in the environment). GoogleTest is compiled from source

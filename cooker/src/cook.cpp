@@ -35,6 +35,12 @@ PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress&
   for (uint8_t v : p.texels.valid) valid += v ? 1 : 0;
   int semi_lights = 0;
   for (const Light& l : p.scene.lights) semi_lights += l.semi_dynamic ? 1 : 0;
+  if (semi_lights == 0 && p.scene.objects.empty())
+    progress.message(
+        "note: the scene marks no light or object semi-dynamic (a node's extras "
+        "\"semiDynamic\": true), so everything is baked static and nothing can change at run "
+        "time. Blender writes custom properties only with Include > Custom Properties on in its "
+        "glTF export (off by default)");
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& s = report.root()["scene"];
   s["triangles"] = p.scene.triangle_count();
@@ -48,6 +54,8 @@ PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress&
   l["height"] = p.layout.height;
   l["texels_per_unit"] = p.layout.texels_per_unit;
   l["verbatim_uv1"] = p.layout.verbatim_uv1;
+  l["uv1_regions"] = p.layout.uv1_regions;
+  l["unwrapped_regions"] = p.layout.unwrapped_regions;
   l["regions"] = p.layout.regions.size();
   l["notes"] = p.layout.notes;
   l["texels"] = p.texels.position.size();
@@ -66,17 +74,8 @@ PreparedScene prepare_scene(const std::string& path, const LayoutOptions& option
 }
 
 void finalize_maps(BakedMaps& maps, const PreparedScene& p, Progress& progress, Report& report) {
-  progress.begin("finalize maps", 1 + maps.contribution.size() + maps.shadows.size() +
-                                      maps.pair_corrections.size() + maps.static_shadows.size());
-  auto fin = [&](FloatImage& m) {
-    finalize_map(m, p.scene, p.layout, p.texels);
-    progress.advance();
-  };
-  fin(maps.base);
-  for (FloatImage& c : maps.contribution) fin(c);
-  for (ShadowMap& s : maps.shadows) fin(s.map);
-  for (PairCorrectionMap& c : maps.pair_corrections) fin(c.map);
-  for (StaticShadowMap& s : maps.static_shadows) fin(s.map);
+  progress.begin("finalize maps", 1);
+  finalize_maps(maps, p.scene, p.layout, p.texels);
   report.stage_time("finalize", progress.end());
 }
 
@@ -103,6 +102,18 @@ FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const Bake
   finalize_map(map, p.scene, p.layout, p.texels);
   report.stage_time("finalize", progress.end());
   return map;
+}
+
+ReferenceBake cook_reference_state(const PreparedScene& p, const StateSpec& state,
+                                   const ReferenceOptions& options, Progress& progress,
+                                   Report& report) {
+  ReferenceBake rb = bake_reference(p.scene, p.texels, *p.tracer, state, options, progress, report);
+  progress.begin("finalize maps", 2);
+  finalize_map(rb.map, p.scene, p.layout, p.texels);
+  progress.advance();
+  finalize_map(rb.std_error, p.scene, p.layout, p.texels);
+  report.stage_time("finalize", progress.end());
+  return rb;
 }
 
 }  // namespace lightpatch::cooker

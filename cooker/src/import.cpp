@@ -504,18 +504,35 @@ void Importer::visit(int node, const glm::mat4& parent, int depth) {
   for (int child : n.children) visit(child, world, depth + 1);
 }
 
-bool extras_flag(const tinygltf::Value& extras, const char* key) {
+// A boolean of a node's extras: true/false, or 1/0 as Blender writes boolean custom properties.
+// Anything else is an error naming `where` (a misspelt value must not silently bake a static
+// node).
+bool extras_flag(const tinygltf::Value& extras, const char* key, const std::string& where) {
   if (!extras.IsObject() || !extras.Has(key)) return false;
   const tinygltf::Value& v = extras.Get(key);
   if (v.IsBool()) return v.Get<bool>();
-  if (v.IsNumber()) return v.GetNumberAsDouble() != 0.0;  // Blender writes 1/0 for some props
-  return false;
+  if (v.IsNumber() && (v.GetNumberAsDouble() == 0.0 || v.GetNumberAsDouble() == 1.0))
+    return v.GetNumberAsDouble() != 0.0;
+  throw CookError(where + ": extras." + key + " must be true or false (or 1 or 0)");
+}
+
+// A node's extras.lightmapScale: the texel density factor of its meshes, in (0, 1024].
+float extras_density(const tinygltf::Value& extras, const std::string& where) {
+  if (!extras.IsObject() || !extras.Has("lightmapScale")) return 1.0f;
+  const tinygltf::Value& v = extras.Get("lightmapScale");
+  const double k = v.IsNumber() ? v.GetNumberAsDouble() : -1.0;
+  if (!(k > 0.0 && k <= 1024.0))
+    throw CookError(where +
+                    ": extras.lightmapScale must be a number in (0, 1024] (a factor of "
+                    "the texel density)");
+  return static_cast<float>(k);
 }
 
 // A flag whose absence means `absent` (castShadows: only an explicit false turns it off).
-bool extras_flag_or(const tinygltf::Value& extras, const char* key, bool absent) {
+bool extras_flag_or(const tinygltf::Value& extras, const char* key, bool absent,
+                    const std::string& where) {
   if (!extras.IsObject() || !extras.Has(key)) return absent;
-  return extras_flag(extras, key);
+  return extras_flag(extras, key, where);
 }
 
 int Importer::texture_for(int gltf_texture) {
@@ -633,7 +650,10 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
   if (size_t(n.mesh) >= model_.meshes.size())
     throw CookError(
         err(node_label(model_, node) + " refers to missing mesh " + std::to_string(n.mesh)));
-  const bool semi = extras_flag(n.extras, "semiDynamic");
+  const std::string where = err(node_label(model_, node));
+  const bool semi = extras_flag(n.extras, "semiDynamic", where);
+  const bool exclude = extras_flag(n.extras, "lightmapExclude", where);
+  const float density = extras_density(n.extras, where);
   int object = -1;
   if (semi) {
     object = int(scene_.objects.size());
@@ -704,8 +724,11 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
     mi.name = n.name;
     mi.node_index = node;
     mi.primitive_index = int(p);
-    mi.cast_shadows = extras_flag_or(n.extras, "castShadows", true);
+    mi.cast_shadows = extras_flag_or(n.extras, "castShadows", true, where);
     mi.object = object;
+    mi.world = world;
+    mi.lightmap_scale = density;
+    mi.lightmap_exclude = exclude;
     if (prim.material >= 0) {
       if (size_t(prim.material) >= model_.materials.size())
         throw CookError(
@@ -781,6 +804,7 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
         for (int k = 0; k < 3; ++k) {
           const uint32_t src = kept[t + size_t(k)];
           flat.indices.push_back(uint32_t(flat.positions.size()));
+          flat.gltf_vertex.push_back(src);
           flat.positions.push_back(mi.positions[src]);
           flat.normals.push_back(nrm);
           if (!raw.uv0.empty()) flat.uv0.push_back(raw.uv0[src]);
@@ -841,7 +865,7 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
   if (l.type == LightType::kSpot && !(l.inner_cone >= 0 && l.inner_cone <= l.outer_cone &&
                                       l.outer_cone > 0 && l.outer_cone <= 1.5707964f))
     throw CookError(err(label + ": spot cone angles need 0 <= inner <= outer <= pi/2, outer > 0"));
-  l.semi_dynamic = extras_flag(n.extras, "semiDynamic");
+  l.semi_dynamic = extras_flag(n.extras, "semiDynamic", err(label));
   if (n.extras.IsObject() && n.extras.Has("lightRadius")) {
     const tinygltf::Value& r = n.extras.Get("lightRadius");
     if (!r.IsNumber() || !std::isfinite(r.GetNumberAsDouble()) || r.GetNumberAsDouble() < 0)

@@ -357,6 +357,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     for (size_t i = 0; i < scene.meshes.size(); ++i) {
       const MeshInstance& mi = scene.meshes[i];
       const MeshLayout& ml = layout.meshes[i];
+      if (ml.indices.empty()) continue;  // kept out of the light map (lightmapExclude)
       if (ml.source_vertex.size() != ml.uv.size())
         throw CookError("mesh layout " + std::to_string(i) + ": UV count");
       PackContents::Mesh m;
@@ -364,8 +365,15 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       m.record.node_index = mi.node_index < 0 ? 0xFFFFFFFFu : uint32_t(mi.node_index);
       m.record.primitive = uint32_t(mi.primitive_index);
       m.record.object = mi.object < 0 ? kNone16 : uint16_t(mi.object);
+      if (ml.from_uv1) {
+        m.record.flags = kMeshFlagTexcoord1;
+        for (int k = 0; k < 4; ++k) m.record.lightmap_scale_offset[k] = ml.uv1_scale_offset[k];
+      }
+      // Vertices name the glTF vertex: the importer's unwelded vertex maps back to it.
       for (size_t v = 0; v < ml.uv.size(); ++v) {
-        m.vertices.push_back(MeshVertex{ml.source_vertex[v], ml.uv[v].x, ml.uv[v].y});
+        const uint32_t src = ml.source_vertex[v];
+        const uint32_t gltf = mi.gltf_vertex.empty() ? src : mi.gltf_vertex[src];
+        m.vertices.push_back(MeshVertex{gltf, ml.uv[v].x, ml.uv[v].y});
       }
       m.indices = ml.indices;
       for (uint32_t idx : m.indices) {

@@ -123,4 +123,48 @@ std::vector<StateSpec> load_states_jsonl(const std::string& path) {
   return out;
 }
 
+ResolvedState resolve_state(const Scene& scene, const StateSpec& state) {
+  ResolvedState r;
+  r.radiant.resize(scene.lights.size());
+  for (size_t i = 0; i < scene.lights.size(); ++i) {
+    r.radiant[i] = scene.lights[i].color * scene.lights[i].intensity;
+  }
+  std::vector<std::string> unknown;
+  for (const auto& [name, o] : state.lights) {
+    size_t i = 0;
+    while (i < scene.lights.size() && scene.lights[i].name != name) ++i;
+    if (i == scene.lights.size()) {
+      unknown.push_back("light '" + name + "'");
+      continue;
+    }
+    const Light& l = scene.lights[i];
+    if (!l.semi_dynamic) {
+      throw CookError("state changes light '" + name +
+                      "', which is static (only semi-dynamic lights can change)");
+    }
+    const glm::vec3 color = o.has_color ? glm::vec3(o.color[0], o.color[1], o.color[2]) : l.color;
+    const float intensity = o.has_intensity ? o.intensity : l.intensity;
+    r.radiant[i] = (o.has_on && !o.on) ? glm::vec3(0.0f) : color * intensity;
+  }
+  r.visible.assign(scene.objects.size(), 1);
+  for (const auto& [name, vis] : state.objects) {
+    size_t i = 0;
+    while (i < scene.objects.size() && scene.objects[i].name != name) ++i;
+    if (i == scene.objects.size()) {
+      unknown.push_back("object '" + name + "'");
+      continue;
+    }
+    r.visible[i] = vis ? 1 : 0;
+  }
+  if (!unknown.empty()) {
+    std::string list;
+    for (const std::string& u : unknown) list += (list.empty() ? "" : ", ") + u;
+    throw CookError(
+        "the state names what the scene does not have (or has not marked "
+        "semiDynamic): " +
+        list);
+  }
+  return r;
+}
+
 }  // namespace lightpatch::cooker

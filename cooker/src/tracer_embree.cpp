@@ -13,6 +13,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "lightpatch/cooker/error.h"
@@ -48,38 +49,20 @@ class EmbreeTracer;
 
 // Embree's packet types and calls by width, so one template serves 4, 8 and 16.
 template <int W>
-struct Packet;
-template <>
-struct Packet<4> {
-  using RayHit = RTCRayHit4;
-  using Ray = RTCRay4;
+struct Packet {
+  static_assert(W == 4 || W == 8 || W == 16);
+  using RayHit =
+      std::conditional_t<W == 4, RTCRayHit4, std::conditional_t<W == 8, RTCRayHit8, RTCRayHit16>>;
+  using Ray = std::conditional_t<W == 4, RTCRay4, std::conditional_t<W == 8, RTCRay8, RTCRay16>>;
   static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-    rtcIntersect4(v, s, c, r);
+    if constexpr (W == 4) rtcIntersect4(v, s, c, r);
+    if constexpr (W == 8) rtcIntersect8(v, s, c, r);
+    if constexpr (W == 16) rtcIntersect16(v, s, c, r);
   }
   static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
-    rtcOccluded4(v, s, c, r);
-  }
-};
-template <>
-struct Packet<8> {
-  using RayHit = RTCRayHit8;
-  using Ray = RTCRay8;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-    rtcIntersect8(v, s, c, r);
-  }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
-    rtcOccluded8(v, s, c, r);
-  }
-};
-template <>
-struct Packet<16> {
-  using RayHit = RTCRayHit16;
-  using Ray = RTCRay16;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-    rtcIntersect16(v, s, c, r);
-  }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
-    rtcOccluded16(v, s, c, r);
+    if constexpr (W == 4) rtcOccluded4(v, s, c, r);
+    if constexpr (W == 8) rtcOccluded8(v, s, c, r);
+    if constexpr (W == 16) rtcOccluded16(v, s, c, r);
   }
 };
 
@@ -220,9 +203,17 @@ class EmbreeTracer final : public Tracer {
   }
 
   void occluded_static_many(const Ray* rays, int n, uint8_t* blocked) const override {
-    if (packet_width_ == 16) return occluded_packets<16>(rays, n, blocked);
-    if (packet_width_ == 8) return occluded_packets<8>(rays, n, blocked);
-    occluded_packets<4>(rays, n, blocked);
+    occluded_batch(rays, n, blocked, kStaticMask);
+  }
+
+  void occluded_many(const Ray* rays, int n, uint8_t* blocked) const override {
+    occluded_batch(rays, n, blocked, kStaticMask | kObjectMask);
+  }
+
+  void occluded_batch(const Ray* rays, int n, uint8_t* blocked, unsigned accept) const {
+    if (packet_width_ == 16) return occluded_packets<16>(rays, n, blocked, accept);
+    if (packet_width_ == 8) return occluded_packets<8>(rays, n, blocked, accept);
+    occluded_packets<4>(rays, n, blocked, accept);
   }
 
   int batch_width() const override { return packet_width_; }
@@ -440,16 +431,16 @@ class EmbreeTracer final : public Tracer {
   }
 
   template <int W>
-  void occluded_packets(const Ray* rays, int n, uint8_t* blocked) const {
+  void occluded_packets(const Ray* rays, int n, uint8_t* blocked, unsigned accept) const {
     QueryContext qc;
-    init_context(qc, kStaticMask);
+    init_context(qc, accept);
     for (int first = 0; first < n; first += W) {
       const int m = std::min(W, n - first);
       alignas(64) int valid[W];
       alignas(64) typename Packet<W>::Ray ray;
       int live = 0;
       for (int i = 0; i < W; ++i) {
-        valid[i] = (i < m && set_lane(ray, i, rays[first + i], kStaticMask)) ? -1 : 0;
+        valid[i] = (i < m && set_lane(ray, i, rays[first + i], accept)) ? -1 : 0;
         live += valid[i] != 0 ? 1 : 0;
       }
       if (live > 0) {

@@ -1,12 +1,16 @@
-// Light-map parameterization (seed 004 §6.1-6.2, §6.9). Either every mesh's TEXCOORD_1 verbatim,
-// checked for overlaps, or an automatic unwrap: per mesh, charts grown across shared edges while
-// the face normal stays within kChartCos of the chart's seed, projected on the seed's plane with
-// overlap rejection, rotated to their tightest box; charts packed per region (one glTF node) and
-// regions packed into one square page, largest first. Everything is ordered by index, so the same
-// scene and options give the same layout.
+// Light-map parameterization (seed 004 §6.1-6.2, §6.9). A region is one glTF node's meshes. Its
+// light-map UVs are either its own TEXCOORD_1 (each node's UVs in [0,1], as Blender's Lightmap
+// Pack, Unity and Godot write them), checked for overlaps and placed whole with one scale and
+// offset, or an automatic unwrap: per mesh, charts grown across shared edges while the face
+// normal stays within kChartCos of the chart's seed, projected on the seed's plane with overlap
+// rejection, rotated to their tightest box, and packed in the region's rectangle. Regions are
+// packed into one page, tallest first. When every node has TEXCOORD_1 and no two overlap, the
+// UVs are one layout over the whole scene and are used as they are. Everything is ordered by
+// index, so the same scene and options give the same layout.
 #include "lightpatch/cooker/unwrap.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -44,11 +48,20 @@ struct Chart {
   int x = 0, y = 0;
 };
 
+// A region (one glTF node's meshes) on its way into the page: either unwrapped charts packed in
+// its rectangle, or its own TEXCOORD_1 layout placed whole (scaled uniformly, as Unity's
+// lightmapScaleOffset places a renderer's UV2).
 struct RegionCharts {
   Region region;
-  std::vector<int> charts;  // into the chart list
-  int w = 0, h = 0;         // packed size (texels)
-  int x = 0, y = 0;         // in the page
+  float density = 1.0f;     // extras.lightmapScale
+  std::vector<int> charts;  // unwrapped charts, into the chart list
+  bool uv1 = false;
+  glm::vec2 uv_lo{0.0f}, uv_size{0.0f};  // bounding box of its TEXCOORD_1
+  float texels_per_uv = 0.0f;  // at 1 texel per metre: sqrt(world area / UV area) per UV unit
+  float uv_gap = 0.0f;         // smallest UV distance between two of its charts (0: unknown)
+  float scale = 0.0f;          // texels per UV unit used (placement)
+  int w = 0, h = 0;            // packed size (texels)
+  int x = 0, y = 0;            // in the page
 };
 
 float triangle_area(const MeshInstance& m, size_t t) {
@@ -257,23 +270,37 @@ struct Packed {
   int height = 0;  // the page's rows actually used, rounded up to 4 (the square page when fixed)
 };
 
-// Sizes every chart at density `tpu`, packs charts per region and regions into the smallest
-// square page (a multiple of 4) that holds them, at most `max_page`, or exactly `fixed_page`.
+// Charts of a TEXCOORD_1 layout closer than this (texels) share texels: conservative
+// rasterization reaches 0.7 texel past each, and bilinear filtering half a texel more. The cook
+// says so (the node's lightmapScale or the UVs' margin is the author's to raise: raising it here
+// would cost the whole node's texels for a margin).
+constexpr float kChartGapTexels = 2.0f;
+
+// Sizes every chart and TEXCOORD_1 region at density `tpu` (a region's UV area spread over its
+// surface), packs charts per region and regions into the smallest square page (a multiple of 4)
+// that holds them, at most `max_page`, or exactly `fixed_page`.
 Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, float tpu,
                 int border, int fixed_page, int max_page) {
-  for (Chart& c : charts) {
-    c.rect_w = std::max(1, static_cast<int>(std::ceil(c.size.x * tpu))) + 2 * border;
-    c.rect_h = std::max(1, static_cast<int>(std::ceil(c.size.y * tpu))) + 2 * border;
-  }
   int64_t total = 0;
   for (RegionCharts& r : regions) {
+    if (r.uv1) {
+      r.scale = tpu * r.density * r.texels_per_uv;
+      r.w = std::max(1, static_cast<int>(std::ceil(r.uv_size.x * r.scale))) + 2 * border;
+      r.h = std::max(1, static_cast<int>(std::ceil(r.uv_size.y * r.scale))) + 2 * border;
+      total += int64_t(r.w) * r.h;
+      continue;
+    }
     std::vector<std::pair<int, int>> sizes, pos;
     int64_t area = 0;
     int widest = 0;
     for (int ci : r.charts) {
-      sizes.push_back({charts[size_t(ci)].rect_w, charts[size_t(ci)].rect_h});
-      area += int64_t(charts[size_t(ci)].rect_w) * charts[size_t(ci)].rect_h;
-      widest = std::max(widest, charts[size_t(ci)].rect_w);
+      Chart& c = charts[size_t(ci)];
+      const float density = tpu * r.density;
+      c.rect_w = std::max(1, static_cast<int>(std::ceil(c.size.x * density))) + 2 * border;
+      c.rect_h = std::max(1, static_cast<int>(std::ceil(c.size.y * density))) + 2 * border;
+      sizes.push_back({c.rect_w, c.rect_h});
+      area += int64_t(c.rect_w) * c.rect_h;
+      widest = std::max(widest, c.rect_w);
     }
     const int strip = std::max(widest, static_cast<int>(std::ceil(std::sqrt(double(area) * 1.15))));
     r.h = shelf_pack(sizes, pos, strip);
@@ -314,19 +341,29 @@ Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, 
   return result;
 }
 
-double total_area(const Scene& scene) {
+double mesh_area(const MeshInstance& m) {
   double a = 0.0;
-  for (const MeshInstance& m : scene.meshes)
-    for (size_t t = 0; t < m.indices.size() / 3; ++t) a += triangle_area(m, t);
+  for (size_t t = 0; t < m.indices.size() / 3; ++t) a += triangle_area(m, t);
   return a;
 }
 
-// Regions: one per glTF node (meshes sharing node_index), one per mesh for scenes built in code.
+// Surface of the meshes in the light map, each weighted by its density factor squared: the
+// texels the default density spends.
+double weighted_area(const Scene& scene) {
+  double a = 0.0;
+  for (const MeshInstance& m : scene.meshes)
+    if (!m.lightmap_exclude) a += mesh_area(m) * double(m.lightmap_scale) * m.lightmap_scale;
+  return a;
+}
+
+// Regions: one per glTF node (meshes sharing node_index), one per mesh for scenes built in code;
+// meshes kept out of the light map belong to none.
 std::vector<Region> make_regions(const Scene& scene) {
   std::vector<Region> regions;
   std::map<int, size_t> by_node;
   for (size_t i = 0; i < scene.meshes.size(); ++i) {
     const MeshInstance& m = scene.meshes[i];
+    if (m.lightmap_exclude) continue;
     if (m.node_index >= 0) {
       auto it = by_node.find(m.node_index);
       if (it != by_node.end()) {
@@ -351,13 +388,150 @@ std::string mesh_label(const MeshInstance& m) {
                            : std::string("an unnamed mesh");
 }
 
-Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
+std::string overlap_error(const MeshInstance& m, size_t triangle, const MeshInstance& other) {
+  return "TEXCOORD_1 of " + mesh_label(m) + " (primitive " + std::to_string(m.primitive_index) +
+         ") has triangle " + std::to_string(triangle) + " overlapping " +
+         (&other == &m
+              ? std::string("another of its own triangles")
+              : mesh_label(other) + " (primitive " + std::to_string(other.primitive_index) + ")") +
+         "; a node's light-map UVs must not overlap (--unwrap always ignores them)";
+}
+
+// The triangles of `meshes` in TEXCOORD_1 inserted into `grid`, `owner` recording each one's
+// mesh. Returns the mesh index of the first triangle overlapping an earlier one (-1: none);
+// `first` and `second` receive the two meshes and `triangle` the later triangle's index.
+struct Uv1Overlap {
+  int first = -1, second = -1;
+  size_t triangle = 0;
+};
+Uv1Overlap insert_uv1(const Scene& scene, const std::vector<int>& meshes, UvOverlapGrid& grid,
+                      std::vector<int>& owner) {
+  for (int mi : meshes) {
+    const MeshInstance& m = scene.meshes[size_t(mi)];
+    for (size_t t = 0; t < m.indices.size() / 3; ++t) {
+      glm::vec2 tri[3];
+      for (int k = 0; k < 3; ++k) tri[k] = m.uv1[m.indices[3 * t + k]];
+      int other = -1;
+      if (grid.overlaps(tri, &other)) return Uv1Overlap{owner[size_t(other)], mi, t};
+      grid.insert(tri);
+      owner.push_back(mi);
+    }
+  }
+  return {};
+}
+
+// Distance between two triangles in the plane that do not overlap (0 where they touch).
+float triangle_distance(const glm::vec2* a, const glm::vec2* b) {
+  auto point_segment = [](glm::vec2 p, glm::vec2 s0, glm::vec2 s1) {
+    const glm::vec2 e = s1 - s0;
+    const float len2 = glm::dot(e, e);
+    const float t = len2 > 0.0f ? std::clamp(glm::dot(p - s0, e) / len2, 0.0f, 1.0f) : 0.0f;
+    return glm::length(p - (s0 + e * t));
+  };
+  float d = std::numeric_limits<float>::max();
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) {
+      d = std::min(d, point_segment(a[i], b[k], b[(k + 1) % 3]));
+      d = std::min(d, point_segment(b[i], a[k], a[(k + 1) % 3]));
+    }
+  return d;
+}
+
+// The smallest TEXCOORD_1 distance between two charts (sets of triangles joined by shared UV
+// corners) of a region, looked for up to `reach` (UV units); 0 if none is that close.
+float chart_gap(const Scene& scene, const std::vector<int>& meshes, float reach) {
+  std::vector<glm::vec2> tris;
+  std::vector<uint32_t> chart;
+  {
+    // Union-find over corners welded by exact UV, per mesh (primitives do not share vertices).
+    std::vector<uint32_t> parent;
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (int mi : meshes) {
+      const MeshInstance& m = scene.meshes[size_t(mi)];
+      const size_t nt = m.indices.size() / 3;
+      const uint32_t base = uint32_t(parent.size());
+      for (size_t t = 0; t < nt; ++t) parent.push_back(uint32_t(base + t));
+      std::map<std::pair<float, float>, uint32_t> corner;  // UV -> a triangle using it
+      for (size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec2 uv = m.uv1[m.indices[3 * t + k]];
+          tris.push_back(uv);
+          auto [it, fresh] = corner.emplace(std::make_pair(uv.x, uv.y), uint32_t(base + t));
+          if (!fresh) parent[find(uint32_t(base + t))] = find(it->second);
+        }
+    }
+    for (uint32_t t = 0; t < parent.size(); ++t) chart.push_back(find(t));
+  }
+  if (!(reach > 0.0f)) return 0.0f;
+  // Triangles binned by their boxes grown by reach/2; pairs of different charts sharing a cell.
+  std::map<std::pair<int64_t, int64_t>, std::vector<uint32_t>> cells;
+  for (uint32_t t = 0; t < chart.size(); ++t) {
+    const glm::vec2* p = &tris[size_t(t) * 3];
+    const glm::vec2 lo = glm::min(p[0], glm::min(p[1], p[2])) - 0.5f * reach;
+    const glm::vec2 hi = glm::max(p[0], glm::max(p[1], p[2])) + 0.5f * reach;
+    const int64_t x0 = int64_t(std::floor(lo.x / reach)), x1 = int64_t(std::floor(hi.x / reach));
+    const int64_t y0 = int64_t(std::floor(lo.y / reach)), y1 = int64_t(std::floor(hi.y / reach));
+    if ((x1 - x0 + 1) * (y1 - y0 + 1) > 4096) continue;  // a triangle far larger than the gap
+    for (int64_t y = y0; y <= y1; ++y)
+      for (int64_t x = x0; x <= x1; ++x) cells[{x, y}].push_back(t);
+  }
+  float gap = reach;
+  for (const auto& [cell, list] : cells)
+    for (size_t i = 0; i < list.size(); ++i)
+      for (size_t j = i + 1; j < list.size(); ++j)
+        if (chart[list[i]] != chart[list[j]])
+          gap = std::min(gap,
+                         triangle_distance(&tris[size_t(list[i]) * 3], &tris[size_t(list[j]) * 3]));
+  return gap < reach ? gap : 0.0f;
+}
+
+// Fills a TEXCOORD_1 region's UV box, area ratio and chart gap; throws if its UVs overlap.
+void measure_uv1(const Scene& scene, RegionCharts& r) {
+  UvOverlapGrid grid;
+  std::vector<int> owner;
+  const Uv1Overlap o = insert_uv1(scene, r.region.meshes, grid, owner);
+  if (o.second >= 0)
+    throw CookError(
+        overlap_error(scene.meshes[size_t(o.second)], o.triangle, scene.meshes[size_t(o.first)]));
+  glm::vec2 lo(1.0f), hi(0.0f);
+  double uv_area = 0.0, world_area = 0.0;
+  for (int mi : r.region.meshes) {
+    const MeshInstance& m = scene.meshes[size_t(mi)];
+    world_area += mesh_area(m);
+    for (size_t t = 0; t < m.indices.size() / 3; ++t) {
+      const glm::vec2 a = m.uv1[m.indices[3 * t]], b = m.uv1[m.indices[3 * t + 1]],
+                      c = m.uv1[m.indices[3 * t + 2]];
+      uv_area += 0.5 * std::abs(double((b - a).x) * (c - a).y - double((b - a).y) * (c - a).x);
+      lo = glm::min(lo, glm::min(a, glm::min(b, c)));
+      hi = glm::max(hi, glm::max(a, glm::max(b, c)));
+    }
+  }
+  if (!(uv_area > 1e-12))
+    throw CookError("TEXCOORD_1 of " + mesh_label(scene.meshes[size_t(r.region.meshes[0])]) +
+                    " has no area (every triangle collapses in the light-map UVs)");
+  r.uv1 = true;
+  r.uv_lo = lo;
+  r.uv_size = hi - lo;
+  r.texels_per_uv = static_cast<float>(std::sqrt(world_area / uv_area));
+  // Gaps narrower than 1/32 of the layout matter below 64 texels across.
+  r.uv_gap = chart_gap(scene, r.region.meshes, std::max(r.uv_size.x, r.uv_size.y) / 32.0f);
+}
+
+Layout verbatim_layout(const Scene& scene, const std::vector<Region>& regions,
+                       const LayoutOptions& options) {
   Layout layout;
   layout.verbatim_uv1 = true;
+  layout.uv1_regions = int(regions.size());
   // The page: the requested size, or one that gives the requested (or default) density to the
   // scene's surface if its UVs fill the page.
   int page = options.lightmap_size;
-  const double area = std::max(total_area(scene), 1e-30);
+  double area = 0.0;
+  for (const MeshInstance& m : scene.meshes)
+    if (!m.lightmap_exclude) area += mesh_area(m);
+  area = std::max(area, 1e-30);
   if (page <= 0) {
     const double tpu = options.texels_per_unit > 0.0f ? options.texels_per_unit
                                                       : std::sqrt(kDefaultSurfaceTexels / area);
@@ -366,39 +540,23 @@ Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
   }
   layout.width = layout.height = page;
   layout.texels_per_unit = static_cast<float>(page / std::sqrt(area) / 1.3);
-
-  // Overlap check across every mesh: two triangles may share edges and corners, not area.
-  UvOverlapGrid grid;
-  std::vector<int> owner;  // mesh of each inserted triangle
-  for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
-    const MeshInstance& m = scene.meshes[mi];
-    MeshLayout ml;
-    ml.source_vertex.resize(m.positions.size());
-    std::iota(ml.source_vertex.begin(), ml.source_vertex.end(), 0u);
-    ml.uv = m.uv1;
-    ml.indices = m.indices;
-    for (size_t t = 0; t < m.indices.size() / 3; ++t) {
-      glm::vec2 tri[3];
-      for (int k = 0; k < 3; ++k) tri[k] = m.uv1[m.indices[3 * t + k]] * float(page);
-      int other = -1;
-      if (grid.overlaps(tri, &other)) {
-        const MeshInstance& o = scene.meshes[size_t(owner[size_t(other)])];
-        throw CookError("TEXCOORD_1 of " + mesh_label(m) + " (primitive " +
-                        std::to_string(m.primitive_index) + ") has triangle " + std::to_string(t) +
-                        " overlapping " +
-                        (&o == &m ? std::string("another of its own triangles") : mesh_label(o)) +
-                        " in the light map; light-map UVs must not overlap");
-      }
-      grid.insert(tri);
-      owner.push_back(int(mi));
+  layout.meshes.resize(scene.meshes.size());
+  for (const Region& r : regions)
+    for (int mi : r.meshes) {
+      const MeshInstance& m = scene.meshes[size_t(mi)];
+      MeshLayout& ml = layout.meshes[size_t(mi)];
+      ml.source_vertex.resize(m.positions.size());
+      std::iota(ml.source_vertex.begin(), ml.source_vertex.end(), 0u);
+      ml.uv = m.uv1;
+      ml.indices = m.indices;
+      ml.from_uv1 = true;
+      ml.uv1_scale_offset = glm::vec4(1.0f, 1.0f, 0.0f, 0.0f);
     }
-    layout.meshes.push_back(std::move(ml));
-  }
 
   // Regions: the texel bounding box of each node's triangles, one texel of margin for filtering;
   // overlapping boxes are merged so that no texel belongs to two regions.
-  std::vector<Region> regions = make_regions(scene);
-  for (Region& r : regions) {
+  std::vector<Region> merged_regions = regions;
+  for (Region& r : merged_regions) {
     glm::vec2 lo(1.0f), hi(0.0f);
     for (int mi : r.meshes)
       for (uint32_t i : scene.meshes[size_t(mi)].indices) {
@@ -418,11 +576,11 @@ Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
   int merges = 0;
   while (merged) {
     merged = false;
-    for (size_t i = 0; i < regions.size() && !merged; ++i)
-      for (size_t j = i + 1; j < regions.size() && !merged; ++j) {
-        if (!overlap(regions[i].rect, regions[j].rect)) continue;
-        Region& a = regions[i];
-        const Region& b = regions[j];
+    for (size_t i = 0; i < merged_regions.size() && !merged; ++i)
+      for (size_t j = i + 1; j < merged_regions.size() && !merged; ++j) {
+        if (!overlap(merged_regions[i].rect, merged_regions[j].rect)) continue;
+        Region& a = merged_regions[i];
+        const Region& b = merged_regions[j];
         const int x0 = std::min(a.rect.x, b.rect.x), y0 = std::min(a.rect.y, b.rect.y);
         const int x1 = std::max(a.rect.x + a.rect.w, b.rect.x + b.rect.w);
         const int y1 = std::max(a.rect.y + a.rect.h, b.rect.y + b.rect.h);
@@ -430,7 +588,7 @@ Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
         a.name += "+" + b.name;
         if (a.object != b.object) a.object = -1;
         a.meshes.insert(a.meshes.end(), b.meshes.begin(), b.meshes.end());
-        regions.erase(regions.begin() + std::ptrdiff_t(j));
+        merged_regions.erase(merged_regions.begin() + std::ptrdiff_t(j));
         merged = true;
         ++merges;
       }
@@ -439,31 +597,44 @@ Layout verbatim_layout(const Scene& scene, const LayoutOptions& options) {
     layout.notes.push_back("TEXCOORD_1: " + std::to_string(merges) +
                            " node(s) share light-map bounding boxes and were merged into one "
                            "patch region");
-  layout.regions = std::move(regions);
+  layout.regions = std::move(merged_regions);
   return layout;
 }
 
-// Edges whose two triangles share both source vertices (a smooth surface) but not both layout
-// vertices (the unwrap cut there).
+// Smooth-surface cuts: edges whose two triangles share both corners, normals included (source
+// vertices welded by position and normal, as exporters split vertices at UV seams), that the
+// layout gives different UVs on each side.
 std::vector<SeamEdge> find_seams(const Scene& scene, const Layout& layout) {
   std::vector<SeamEdge> seams;
   for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
     const MeshInstance& m = scene.meshes[mi];
     const MeshLayout& ml = layout.meshes[mi];
-    // Source edge (sorted) -> first (layout start, layout end) seen, oriented as the source edge.
-    std::map<std::pair<uint32_t, uint32_t>, std::pair<uint32_t, uint32_t>> first;
+    if (ml.indices.empty()) continue;  // not in the light map
+    std::map<std::array<float, 6>, uint32_t> weld_ids;
+    std::vector<uint32_t> weld(m.positions.size());
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+      const glm::vec3 p = m.positions[v], n = m.normals[v];
+      weld[v] =
+          weld_ids.emplace(std::array{p.x, p.y, p.z, n.x, n.y, n.z}, uint32_t(weld_ids.size()))
+              .first->second;
+    }
+    // Welded edge (sorted) -> the first triangle's layout vertices: edge start, edge end (oriented
+    // as the welded edge) and the opposite corner.
+    std::map<std::pair<uint32_t, uint32_t>, std::array<uint32_t, 3>> first;
     for (size_t t = 0; t < m.indices.size() / 3; ++t)
       for (int k = 0; k < 3; ++k) {
-        uint32_t s0 = m.indices[3 * t + k], s1 = m.indices[3 * t + (k + 1) % 3];
+        uint32_t s0 = weld[m.indices[3 * t + k]], s1 = weld[m.indices[3 * t + (k + 1) % 3]];
         uint32_t l0 = ml.indices[3 * t + k], l1 = ml.indices[3 * t + (k + 1) % 3];
+        const uint32_t l2 = ml.indices[3 * t + (k + 2) % 3];
+        if (s0 == s1) continue;
         if (s0 > s1) {
           std::swap(s0, s1);
           std::swap(l0, l1);
         }
-        auto [it, inserted] = first.emplace(std::make_pair(s0, s1), std::make_pair(l0, l1));
-        if (inserted || (it->second.first == l0 && it->second.second == l1)) continue;
-        seams.push_back(
-            SeamEdge{ml.uv[it->second.first], ml.uv[it->second.second], ml.uv[l0], ml.uv[l1]});
+        auto [it, inserted] = first.emplace(std::make_pair(s0, s1), std::array{l0, l1, l2});
+        const auto& [f0, f1, f2] = it->second;
+        if (inserted || (ml.uv[f0] == ml.uv[l0] && ml.uv[f1] == ml.uv[l1])) continue;
+        seams.push_back(SeamEdge{ml.uv[f0], ml.uv[f1], ml.uv[l0], ml.uv[l1], ml.uv[f2], ml.uv[l2]});
       }
   }
   return seams;
@@ -473,31 +644,71 @@ std::vector<SeamEdge> find_seams(const Scene& scene, const Layout& layout) {
 
 Layout build_layout(const Scene& scene, const LayoutOptions& options) {
   if (scene.meshes.empty()) throw CookError("the scene has no meshes to bake");
-  size_t with_uv1 = 0;
-  for (const MeshInstance& m : scene.meshes) with_uv1 += m.uv1.empty() ? 0 : 1;
-  if (with_uv1 == scene.meshes.size()) return verbatim_layout(scene, options);
+  std::vector<Region> base_regions = make_regions(scene);
+  if (base_regions.empty())
+    throw CookError("every mesh is kept out of the light map (extras.lightmapExclude)");
 
-  Layout layout;
-  if (with_uv1 > 0)
-    layout.notes.push_back("TEXCOORD_1 ignored: only " + std::to_string(with_uv1) + " of " +
-                           std::to_string(scene.meshes.size()) +
-                           " meshes have one; the whole scene was unwrapped");
-
-  std::vector<Chart> charts;
-  for (size_t i = 0; i < scene.meshes.size(); ++i) grow_charts(scene.meshes[i], int(i), charts);
-
-  std::vector<RegionCharts> regions;
-  {
-    std::vector<Region> rs = make_regions(scene);
-    std::vector<int> region_of_mesh(scene.meshes.size(), -1);
-    for (size_t r = 0; r < rs.size(); ++r)
-      for (int mi : rs[r].meshes) region_of_mesh[size_t(mi)] = int(r);
-    for (Region& r : rs) regions.push_back(RegionCharts{std::move(r), {}, 0, 0, 0, 0});
-    for (size_t c = 0; c < charts.size(); ++c)
-      regions[size_t(region_of_mesh[size_t(charts[c].mesh)])].charts.push_back(int(c));
+  // Which regions keep their TEXCOORD_1.
+  std::vector<uint8_t> keeps_uv1(base_regions.size(), 0);
+  bool all_uv1 = true, any_density = false;
+  for (size_t r = 0; r < base_regions.size(); ++r) {
+    bool has = true;
+    for (int mi : base_regions[r].meshes) {
+      const MeshInstance& m = scene.meshes[size_t(mi)];
+      any_density |= m.lightmap_scale != 1.0f;
+      if (!m.uv1.empty()) continue;
+      has = false;
+      if (options.unwrap == UnwrapMode::kNever)
+        throw CookError(mesh_label(m) + " (primitive " + std::to_string(m.primitive_index) +
+                        ") has no TEXCOORD_1, which --unwrap never requires");
+    }
+    keeps_uv1[r] = has && options.unwrap != UnwrapMode::kAlways;
+    all_uv1 &= keeps_uv1[r] != 0;
   }
 
-  const double area = std::max(total_area(scene), 1e-30);
+  // One layout over the whole scene, used as it is, where no node asks for its own density and
+  // no two nodes' UVs overlap (else each node's UVs are its own, placed by scale and offset).
+  if (all_uv1 && !any_density) {
+    UvOverlapGrid grid;
+    std::vector<int> owner;
+    bool across = false;
+    for (const Region& r : base_regions) {
+      const Uv1Overlap o = insert_uv1(scene, r.meshes, grid, owner);
+      if (o.second < 0) continue;
+      const MeshInstance &a = scene.meshes[size_t(o.first)], &b = scene.meshes[size_t(o.second)];
+      const bool same_node =
+          o.first == o.second || (a.node_index >= 0 && a.node_index == b.node_index);
+      if (same_node) throw CookError(overlap_error(b, o.triangle, a));
+      across = true;
+      break;
+    }
+    if (!across) {
+      Layout layout = verbatim_layout(scene, base_regions, options);
+      layout.seams = find_seams(scene, layout);
+      return layout;
+    }
+  }
+
+  Layout layout;
+  std::vector<Chart> charts;
+  std::vector<RegionCharts> regions;
+  for (size_t r = 0; r < base_regions.size(); ++r) {
+    RegionCharts rc;
+    rc.region = std::move(base_regions[r]);
+    rc.density = scene.meshes[size_t(rc.region.meshes[0])].lightmap_scale;
+    if (keeps_uv1[r]) {
+      measure_uv1(scene, rc);
+    } else {
+      for (int mi : rc.region.meshes) {
+        const size_t first = charts.size();
+        grow_charts(scene.meshes[size_t(mi)], mi, charts);
+        for (size_t c = first; c < charts.size(); ++c) rc.charts.push_back(int(c));
+      }
+    }
+    regions.push_back(std::move(rc));
+  }
+
+  const double area = std::max(weighted_area(scene), 1e-30);
   const float requested = options.texels_per_unit > 0.0f
                               ? options.texels_per_unit
                               : static_cast<float>(std::sqrt(kDefaultSurfaceTexels / area));
@@ -510,7 +721,8 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
     tpu *= kDensityStep;
   }
   if (!packed.fits) {
-    throw CookError("the light-map charts (" + std::to_string(charts.size()) + ") do not fit a " +
+    throw CookError("the light-map charts (" + std::to_string(charts.size()) + " charts, " +
+                    std::to_string(regions.size()) + " nodes) do not fit a " +
                     std::to_string(options.lightmap_size > 0 ? options.lightmap_size : max_page) +
                     "² page even at a very low density; raise --lightmap-size");
   }
@@ -519,7 +731,10 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
     std::snprintf(buf, sizeof(buf),
                   "texel density lowered from %.4g to %.4g texels/m so that %zu charts fit a %dx%d "
                   "light map",
-                  double(requested), double(tpu), charts.size(), packed.page, packed.height);
+                  double(requested), double(tpu),
+                  charts.size() + size_t(std::count_if(regions.begin(), regions.end(),
+                                                       [](const auto& r) { return r.uv1; })),
+                  packed.page, packed.height);
     layout.notes.push_back(buf);
   }
   layout.width = packed.page;
@@ -527,36 +742,72 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
   layout.texels_per_unit = tpu;
   layout.meshes.resize(scene.meshes.size());
 
-  // Layout vertices: one per (chart, source vertex), so vertices split exactly where charts cut.
   const glm::vec2 inv(1.0f / float(layout.width), 1.0f / float(layout.height));
-  std::vector<std::map<uint32_t, uint32_t>> vertex_of(scene.meshes.size());
+  const int border = options.border_texels;
   std::vector<std::vector<uint32_t>> tri_indices(scene.meshes.size());
-  for (size_t mi = 0; mi < scene.meshes.size(); ++mi)
-    tri_indices[mi].assign(scene.meshes[mi].indices.size(), 0);
-  for (const RegionCharts& r : regions) {
-    for (int ci : r.charts) {
-      const Chart& c = charts[size_t(ci)];
-      const MeshInstance& m = scene.meshes[size_t(c.mesh)];
-      MeshLayout& ml = layout.meshes[size_t(c.mesh)];
-      std::map<uint32_t, uint32_t> local;  // source vertex -> layout vertex of this chart
-      const glm::vec2 origin(float(r.x + c.x + options.border_texels),
-                             float(r.y + c.y + options.border_texels));
-      for (size_t k = 0; k < c.triangles.size(); ++k) {
-        const uint32_t t = c.triangles[k];
-        for (int j = 0; j < 3; ++j) {
-          const uint32_t src = m.indices[3 * t + j];
-          auto [it, inserted] = local.emplace(src, uint32_t(ml.uv.size()));
-          if (inserted) {
-            ml.source_vertex.push_back(src);
-            ml.uv.push_back((origin + c.corner_uv[3 * k + j] * tpu) * inv);
+  std::string close_charts;  // TEXCOORD_1 regions whose charts share texels
+  for (RegionCharts& r : regions) {
+    if (r.uv1) {
+      ++layout.uv1_regions;
+      // page texel = (uv - lo) * scale + origin, as one scale and offset per node.
+      const glm::vec2 origin(float(r.x + border), float(r.y + border));
+      const glm::vec2 scale = glm::vec2(r.scale) * inv;
+      const glm::vec2 offset = (origin - r.uv_lo * r.scale) * inv;
+      for (int mi : r.region.meshes) {
+        const MeshInstance& m = scene.meshes[size_t(mi)];
+        MeshLayout& ml = layout.meshes[size_t(mi)];
+        ml.source_vertex.resize(m.positions.size());
+        std::iota(ml.source_vertex.begin(), ml.source_vertex.end(), 0u);
+        ml.uv.resize(m.uv1.size());
+        for (size_t v = 0; v < m.uv1.size(); ++v) ml.uv[v] = m.uv1[v] * scale + offset;
+        ml.indices = m.indices;
+        ml.from_uv1 = true;
+        ml.uv1_scale_offset = glm::vec4(scale, offset);
+      }
+      const float gap_texels = r.uv_gap * r.scale;
+      if (r.uv_gap > 0.0f && gap_texels < kChartGapTexels - 1e-3f) {
+        char buf[160];
+        std::snprintf(buf, sizeof(buf), "%s'%s' (%.2f)", close_charts.empty() ? "" : ", ",
+                      r.region.name.c_str(), double(gap_texels));
+        close_charts += buf;
+      }
+      r.region.charts.push_back(Rect{r.x, r.y, r.w, r.h});
+    } else {
+      ++layout.unwrapped_regions;
+      for (int ci : r.charts) {
+        const Chart& c = charts[size_t(ci)];
+        r.region.charts.push_back(Rect{r.x + c.x, r.y + c.y, c.rect_w, c.rect_h});
+        const MeshInstance& m = scene.meshes[size_t(c.mesh)];
+        MeshLayout& ml = layout.meshes[size_t(c.mesh)];
+        std::vector<uint32_t>& tri = tri_indices[size_t(c.mesh)];
+        tri.resize(m.indices.size(), 0);
+        // Layout vertices: one per (chart, source vertex), so vertices split where charts cut.
+        std::map<uint32_t, uint32_t> local;
+        const glm::vec2 origin(float(r.x + c.x + border), float(r.y + c.y + border));
+        const float density = tpu * r.density;
+        for (size_t k = 0; k < c.triangles.size(); ++k) {
+          const uint32_t t = c.triangles[k];
+          for (int j = 0; j < 3; ++j) {
+            const uint32_t src = m.indices[3 * t + j];
+            auto [it, inserted] = local.emplace(src, uint32_t(ml.uv.size()));
+            if (inserted) {
+              ml.source_vertex.push_back(src);
+              ml.uv.push_back((origin + c.corner_uv[3 * k + j] * density) * inv);
+            }
+            tri[3 * t + j] = it->second;
           }
-          tri_indices[size_t(c.mesh)][3 * t + j] = it->second;
         }
       }
     }
   }
+  if (!close_charts.empty())
+    layout.notes.push_back(
+        "TEXCOORD_1 charts closer than 2 texels at this density, so light may bleed between "
+        "them, in node(s) " +
+        close_charts +
+        " texels apart); give them a larger extras.lightmapScale or their UVs a larger margin");
   for (size_t mi = 0; mi < scene.meshes.size(); ++mi)
-    layout.meshes[mi].indices = std::move(tri_indices[mi]);
+    if (!tri_indices[mi].empty()) layout.meshes[mi].indices = std::move(tri_indices[mi]);
   layout.seams = find_seams(scene, layout);
   for (RegionCharts& r : regions) {
     r.region.rect = Rect{r.x, r.y, r.w, r.h};

@@ -8,6 +8,7 @@
 // the CPU reference (and with --gles by the GLES runtime) against its float composition.
 #include <fcntl.h>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -27,6 +28,7 @@
 #include "lightpatch/cooker/io.h"
 #include "lightpatch/cooker/pack_builder.h"
 #include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/reference_integrator.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
@@ -43,10 +45,16 @@ namespace {
 
 using namespace lightpatch::cooker;
 
-// The reference: production's integrator with kReferenceFactor times its gather rays
-// and area samples (kQuickReferenceFactor with --quick; --reference-scale), and a seed of its own
-// so that its noise
-// is independent of the sweep's.
+// The reference: by default the path tracer (reference_integrator.h) at --reference-samples
+// paths per texel (kQuickReferenceSamples with --quick); with --reference-integrator cook,
+// production's integrator with kReferenceFactor times its gather rays and area samples
+// (kQuickReferenceFactor with --quick; --reference-scale). Either way a seed of its own,
+// so that its noise is independent of the sweep's.
+constexpr int kQuickReferenceSamples = 64;
+// The path tracer's default: progressive up to 4096 samples per texel, stopping once the noise
+// is at most 0.5 % relative RMSE (the test room stops at 4096, the small inn at 1024).
+constexpr int kReferenceMaxSamples = 4096;
+constexpr double kReferenceNoisePercent = 0.5;
 constexpr int kReferenceFactor = 4;
 constexpr int kQuickReferenceFactor = 2;
 constexpr uint64_t kReferenceSeedOffset = 7919;
@@ -60,7 +68,10 @@ struct AccuracyOptions {
   std::string scene_path, csv_path, plot_path, runtime_csv_path;
   bool gles = false;
   int lightmap_size = 0;
-  int reference_scale = 0;  // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
+  int reference_scale = 0;        // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
+  bool path_traced = true;        // --reference-integrator reference (default) or cook
+  int reference_samples = 0;      // 0 = kReferenceMaxSamples (kQuickReferenceSamples, --quick)
+  double reference_noise = -1.0;  // percent; < 0 = kReferenceNoisePercent (off with --quick)
   bool quick = false;
   bool no_cache = false;
   int threads = 0;
@@ -70,7 +81,7 @@ struct AccuracyOptions {
 
 // One sweep point.
 struct Setting {
-  std::string name;  // unique, e.g. "preset=draft", "photons=30000"
+  std::string name;  // unique, e.g. "preset=draft", "gather_rays=64"
   std::string knob;  // the series it belongs to
   BakeOptions bake;
   EncodingPolicy encoding = EncodingPolicy::kAuto;
@@ -80,6 +91,11 @@ struct Setting {
 
 struct Metrics {
   double rel_rmse = 0.0, max_rel_error = 0.0, psnr_db = 0.0;
+  // rel_rmse^2 = (the row's own error)^2 + (the reference's noise)^2 for independent noise: the
+  // row's own error, and whether it is below the noise (then the row cannot be told from rows
+  // of smaller error).
+  double rel_rmse_excess = 0.0;
+  bool within_noise = false;
 };
 
 struct Row {
@@ -364,13 +380,16 @@ bool same_bake(const Setting& a, const Setting& b) {
          a.bake.indirect == b.bake.indirect;
 }
 
-void mark_pareto(std::vector<Row>& rows) {
+// Errors below the reference's noise (`floor`, as a rel_rmse) count as equal: a row does not win
+// by an error the reference cannot resolve.
+void mark_pareto(std::vector<Row>& rows, double floor) {
+  auto err = [floor](const Row& r) { return std::max(r.m.rel_rmse, floor); };
   for (Row& r : rows) {
     r.pareto = true;
     for (const Row& o : rows) {
       if (&o == &r) continue;
-      const bool no_worse = o.cook_s <= r.cook_s && o.m.rel_rmse <= r.m.rel_rmse;
-      const bool better = o.cook_s < r.cook_s || o.m.rel_rmse < r.m.rel_rmse;
+      const bool no_worse = o.cook_s <= r.cook_s && err(o) <= err(r);
+      const bool better = o.cook_s < r.cook_s || err(o) < err(r);
       if (no_worse && better) {
         r.pareto = false;
         break;
@@ -390,8 +409,8 @@ std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string
   std::string s;
   for (const std::string& n : notes) s += "# " + n + "\n";
   s += "setting,knob,quality,gather_rays,indirect_level,denoise,area_samples,lightmap_size,"
-       "encoding,cook_s,"
-       "rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto\n";
+       "encoding,cook_s,rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto,rel_rmse_excess,"
+       "within_noise\n";
   for (const Row& r : rows) {
     const BakeOptions& b = r.setting.bake;
     const GatherPreset gp = gather_preset(b);
@@ -406,7 +425,8 @@ std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string
          number(r.cook_s, "%.4f") + "," + std::to_string(r.rays) + "," +
          std::to_string(r.pack_bytes) + "," + number(r.m.rel_rmse) + "," +
          number(r.m.max_rel_error) + "," + number(r.m.psnr_db, "%.3f") + "," +
-         (r.pareto ? "1" : "0") + "\n";
+         (r.pareto ? "1" : "0") + "," + number(r.m.rel_rmse_excess) + "," +
+         (r.m.within_noise ? "1" : "0") + "\n";
   }
   return s;
 }
@@ -526,6 +546,10 @@ int verb_accuracy(Args& args) {
   o.no_cache = args.flag("--no-cache");
   o.lightmap_size = args.int_option("--lightmap-size", 0, 8, 4096);
   o.reference_scale = args.int_option("--reference-scale", 0, 1, 16);
+  std::string integrator = "reference";
+  if (!args.option("--reference-integrator", &integrator)) integrator = "reference";
+  o.reference_samples = args.int_option("--reference-samples", 0, 2, 1 << 20);
+  o.reference_noise = args.float_option("--reference-noise", -1.0f, 0.0f, 100.0f);
   o.threads = args.int_option("--threads", 0, 1, 1024);
   o.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.quiet = args.flag("--quiet", "-q");
@@ -539,6 +563,21 @@ int verb_accuracy(Args& args) {
     throw ArgsError("--runtime-csv names the same file as --csv or --plot");
   }
   if (o.gles && o.runtime_csv_path.empty()) throw ArgsError("--gles needs --runtime-csv");
+  if (integrator != "reference" && integrator != "cook") {
+    throw ArgsError("--reference-integrator must be reference or cook, got '" + integrator + "'");
+  }
+  o.path_traced = integrator == "reference";
+  if (o.path_traced && o.reference_scale > 0) {
+    throw ArgsError("--reference-scale is for --reference-integrator cook");
+  }
+  if (!o.path_traced && (o.reference_samples > 0 || o.reference_noise >= 0.0)) {
+    throw ArgsError(
+        "--reference-samples and --reference-noise are for --reference-integrator reference");
+  }
+  if (o.reference_samples == 0) {
+    o.reference_samples = o.quick ? kQuickReferenceSamples : kReferenceMaxSamples;
+  }
+  if (o.reference_noise < 0.0) o.reference_noise = o.quick ? 0.0 : kReferenceNoisePercent;
   if (o.lightmap_size == 0) o.lightmap_size = o.quick ? kQuickLightmapSize : kDefaultLightmapSize;
   probe_output_folder(o.csv_path);
   probe_output_folder(o.plot_path);
@@ -569,15 +608,20 @@ int verb_accuracy(Args& args) {
   {
     BakeOptions prod;
     prod.quality = Quality::kProduction;
-    const GatherPreset p = gather_preset(prod);
     ref_options.quality = Quality::kProduction;
-    ref_options.gather_rays = p.rays * factor;
+    ref_options.gather_rays = gather_preset(prod).rays * factor;
     ref_options.area_samples = 64 * factor;
     ref_options.seed = o.seed + kReferenceSeedOffset;
     ref_options.threads = o.threads;
   }
+  ReferenceOptions pt_options;
+  pt_options.samples = o.reference_samples;
+  pt_options.target_noise = 0.01 * o.reference_noise;
+  pt_options.seed = o.seed + kReferenceSeedOffset;
+  pt_options.threads = o.threads;
   Hasher hasher;
-  hasher.text("lightpatch accuracy reference v1");
+  hasher.text(o.path_traced ? "lightpatch accuracy reference v2: path tracing"
+                            : "lightpatch accuracy reference v1");
   {
     const std::vector<uint8_t> file = read_file(o.scene_path);
     hasher.bytes(file.data(), file.size());
@@ -601,37 +645,84 @@ int verb_accuracy(Args& args) {
       hasher.value(l.radius);
       hasher.value(l.semi_dynamic);
     }
-    hasher.value(ref_options.quality);
-    hasher.value(ref_options.gather_rays);
-    hasher.value(ref_options.area_samples);
-    hasher.value(ref_options.seed);
-  }
-  const std::string cache_path =
-      folder_of(o.csv_path) + "/lightpatch-accuracy-reference-" + hex64(hasher.h) + ".pfm";
-  FloatImage reference;
-  bool cached = false;
-  if (!o.no_cache && std::filesystem::exists(cache_path)) {
-    try {
-      reference = read_pfm(cache_path);
-      cached = reference.width == ref_layout.layout.width &&
-               reference.height == ref_layout.layout.height && reference.channels == 3;
-    } catch (const CookError& e) {
-      progress.message(std::string("note: reference cache unreadable, baking again: ") + e.what());
+    if (o.path_traced) {
+      hasher.value(pt_options.samples);
+      hasher.value(pt_options.target_noise);
+      hasher.value(pt_options.seed);
+    } else {
+      hasher.value(ref_options.quality);
+      hasher.value(ref_options.area_samples);
+      hasher.value(ref_options.gather_rays);
+      hasher.value(ref_options.integrator);
+      hasher.value(ref_options.seed);
     }
   }
+  const std::string cache_stem =
+      folder_of(o.csv_path) + "/lightpatch-accuracy-reference-" + hex64(hasher.h);
+  const std::string cache_path = cache_stem + ".pfm";
+  // The path tracer's also: its standard-error map and what it traced (samples, rays, seconds).
+  const std::string cache_error_path = cache_stem + ".stderr.pfm";
+  const std::string cache_info_path = cache_stem + ".json";
+  FloatImage reference, reference_error;
+  nlohmann::json ref_info = nlohmann::json::object();
+  bool cached = false;
+  if (!o.no_cache && std::filesystem::exists(cache_path) &&
+      (!o.path_traced ||
+       (std::filesystem::exists(cache_error_path) && std::filesystem::exists(cache_info_path)))) {
+    try {
+      reference = read_pfm(cache_path);
+      const auto fits = [&](const FloatImage& m) {
+        return m.width == ref_layout.layout.width && m.height == ref_layout.layout.height &&
+               m.channels == 3;
+      };
+      cached = fits(reference);
+      if (o.path_traced) {
+        reference_error = read_pfm(cache_error_path);
+        const std::vector<uint8_t> text = read_file(cache_info_path);
+        ref_info = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
+        cached = cached && fits(reference_error) && ref_info.is_object() &&
+                 ref_info.contains("samples") && ref_info["samples"].is_number_integer();
+      }
+    } catch (const CookError& e) {
+      progress.message(std::string("note: reference cache unreadable, baking again: ") + e.what());
+      cached = false;
+    }
+  }
+  const std::string ref_what =
+      o.path_traced
+          ? "path tracing, up to " + std::to_string(pt_options.samples) + " samples per texel" +
+                (pt_options.target_noise > 0.0
+                     ? ", stopping at " + number(100.0 * pt_options.target_noise, "%.3g") +
+                           " % noise"
+                     : std::string())
+          : "production x" + std::to_string(factor) + ": " +
+                std::to_string(ref_options.gather_rays) + " gather rays, " +
+                std::to_string(ref_options.area_samples) + " area samples";
   double ref_seconds = 0.0;
   if (cached) {
     progress.message("reference: using the cache " + cache_path);
   } else {
-    progress.message("reference: baking (production x" + std::to_string(factor) + ": " +
-                     std::to_string(ref_options.gather_rays) + " gather rays, " +
-                     std::to_string(ref_options.area_samples) + " area samples)");
+    progress.message("reference: baking (" + ref_what + ")");
     const auto t = std::chrono::steady_clock::now();
-    reference = bake_state(scene, ref_layout.layout, ref_layout.texels, *tracer, StateSpec{},
-                           ref_options, progress, scratch);
+    if (o.path_traced) {
+      ReferenceBake rb = bake_reference(scene, ref_layout.texels, *tracer, StateSpec{}, pt_options,
+                                        progress, scratch);
+      reference = std::move(rb.map);
+      reference_error = std::move(rb.std_error);
+      finalize_map(reference_error, scene, ref_layout.layout, ref_layout.texels);
+      ref_info = {{"samples", rb.samples}, {"rays", rb.rays}, {"seconds", rb.seconds}};
+    } else {
+      reference = bake_state(scene, ref_layout.layout, ref_layout.texels, *tracer, StateSpec{},
+                             ref_options, progress, scratch);
+    }
     finalize_map(reference, scene, ref_layout.layout, ref_layout.texels);
     ref_seconds = since(t);
     write_pfm(cache_path, reference);
+    if (o.path_traced) {
+      write_pfm(cache_error_path, reference_error);
+      const std::string text = ref_info.dump(1) + "\n";
+      write_file_atomic(cache_info_path, text.data(), text.size());
+    }
     progress.message("reference: baked in " + number(ref_seconds, "%.2f") + " s, cached in " +
                      cache_path);
   }
@@ -641,6 +732,29 @@ int verb_accuracy(Args& args) {
   const ReferenceStats stats = reference_stats(reference, ref_layout.texels);
   if (stats.valid.empty()) throw CookError("accuracy: the scene has no light-map texels");
   if (!(stats.peak > 0.0)) throw CookError("accuracy: the scene is unlit (the reference is black)");
+  // The path-traced reference's own noise: as a relative RMSE (what it alone adds to every row's
+  // rel_rmse) and as the mean relative standard error over the texels that matter.
+  double noise_rmse = 0.0, noise_mean_rel = 0.0;
+  if (o.path_traced) {
+    double se2 = 0.0, rel = 0.0;
+    size_t counted = 0;
+    for (size_t k = 0; k < stats.valid.size(); ++k) {
+      const float* e = &reference_error.data[size_t(stats.valid[k]) * 3];
+      const float* r = &reference.data[size_t(stats.valid[k]) * 3];
+      const double e2 = double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2];
+      se2 += e2;
+      const double r2 = double(r[0]) * r[0] + double(r[1]) * r[1] + double(r[2]) * r[2];
+      if (stats.matters[k] && r2 > 0.0) {
+        rel += std::sqrt(e2 / r2);
+        ++counted;
+      }
+    }
+    noise_rmse = stats.sum_sq > 0.0 ? std::sqrt(se2 / stats.sum_sq) : 0.0;
+    noise_mean_rel = counted > 0 ? rel / double(counted) : 0.0;
+    progress.message("reference noise: relative RMSE " + number(100.0 * noise_rmse, "%.3f") +
+                     " %, mean relative standard error " + number(100.0 * noise_mean_rel, "%.3f") +
+                     " % over the texels that matter");
+  }
 
   bool has_area = false;
   for (const Light& l : scene.lights) {
@@ -688,13 +802,7 @@ int verb_accuracy(Args& args) {
       Report report;
       fresh.maps = bake_maps(scene, prepared->layout, prepared->texels, *tracer, setting.bake,
                              silent, report);
-      finalize_map(fresh.maps.base, scene, prepared->layout, prepared->texels);
-      for (FloatImage& c : fresh.maps.contribution) {
-        finalize_map(c, scene, prepared->layout, prepared->texels);
-      }
-      for (ShadowMap& s : fresh.maps.shadows) {
-        finalize_map(s.map, scene, prepared->layout, prepared->texels);
-      }
+      finalize_maps(fresh.maps, scene, prepared->layout, prepared->texels);
       fresh.seconds = since(t);
       fresh.rays = tracer->rays_traced() - rays0;
       fresh.setting = setting;
@@ -725,7 +833,12 @@ int verb_accuracy(Args& args) {
     progress.advance();
   }
   progress.end();
-  mark_pareto(rows);
+  for (Row& r : rows) {
+    r.m.rel_rmse_excess =
+        std::sqrt(std::max(0.0, r.m.rel_rmse * r.m.rel_rmse - noise_rmse * noise_rmse));
+    r.m.within_noise = noise_rmse > 0.0 && r.m.rel_rmse_excess <= noise_rmse;
+  }
+  mark_pareto(rows, std::sqrt(2.0) * noise_rmse);
 
   // The runtime: the encoding rows' bake packed with each encoding, recomposed on the CPU
   // reference (float32 target) and, with --gles, by the GLES runtime (RGBA16F target), against
@@ -798,11 +911,30 @@ int verb_accuracy(Args& args) {
 
   std::vector<std::string> notes = {
       "lightpatch accuracy " + o.scene_path + (o.quick ? " (--quick)" : ""),
-      "reference: bake_state of the authored state, production x" + std::to_string(factor) + " (" +
-          std::to_string(ref_options.gather_rays) + " gather rays, " +
-          std::to_string(ref_options.area_samples) + " area samples, seed " +
-          std::to_string(ref_options.seed) + "), " + std::to_string(reference.width) + "x" +
-          std::to_string(reference.height) + (cached ? ", from the cache" : ""),
+      o.path_traced
+          ? "reference: bake-state --integrator reference of the authored state (path tracing, " +
+                ref_info.value("samples", nlohmann::json(0)).dump() + " samples per texel (" +
+                ref_what.substr(std::string("path tracing, ").size()) + ")" + "; " +
+                ref_info.value("rays", nlohmann::json(0)).dump() + " rays in " +
+                number(ref_info.value("seconds", 0.0), "%.1f") + " s, seed " +
+                std::to_string(pt_options.seed) + "), " + std::to_string(reference.width) + "x" +
+                std::to_string(reference.height) + (cached ? ", from the cache" : "")
+          : "reference: bake_state of the authored state, production x" + std::to_string(factor) +
+                " (" + std::to_string(ref_options.gather_rays) + " gather rays, " +
+                std::to_string(ref_options.area_samples) + " area samples, seed " +
+                std::to_string(ref_options.seed) + "), " + std::to_string(reference.width) + "x" +
+                std::to_string(reference.height) + (cached ? ", from the cache" : ""),
+      o.path_traced
+          ? "reference noise: relative RMSE " + number(100.0 * noise_rmse, "%.3f") +
+                " % (sqrt(sum se^2 / sum r^2) over valid texels, se its per-texel standard "
+                "error), mean relative standard error " +
+                number(100.0 * noise_mean_rel, "%.3f") +
+                " % over texels that matter; rel_rmse_excess = sqrt(rel_rmse^2 - noise^2) is a "
+                "row's own error; within_noise = 1 where that is below the noise (such rows "
+                "are not told apart: errors below sqrt(2) x noise are equal for the Pareto "
+                "front)"
+          : "reference noise: not estimated (--reference-integrator cook); rel_rmse_excess = "
+            "rel_rmse, within_noise = 0",
       "each row: bake_maps + finalize + build_pack (cook_s, rays), then the authored state "
       "recomposed from the pack on the CPU reference and compared with the reference over valid "
       "texels",
@@ -849,10 +981,11 @@ int verb_accuracy(Args& args) {
     std::printf("%-34s %9s %12s %10s %9s %9s %8s %s\n", "setting", "cook_s", "rays", "pack_bytes",
                 "rel_rmse", "max_rel", "psnr_db", "pareto");
     for (const Row& r : rows) {
-      std::printf("%-34s %9.3f %12llu %10llu %8.3f%% %8.2f%% %8.2f %s\n", r.setting.name.c_str(),
+      std::printf("%-34s %9.3f %12llu %10llu %8.3f%% %8.2f%% %8.2f %s%s\n", r.setting.name.c_str(),
                   r.cook_s, static_cast<unsigned long long>(r.rays),
                   static_cast<unsigned long long>(r.pack_bytes), 100.0 * r.m.rel_rmse,
-                  100.0 * r.m.max_rel_error, r.m.psnr_db, r.pareto ? "*" : "");
+                  100.0 * r.m.max_rel_error, r.m.psnr_db, r.pareto ? "*" : "",
+                  r.m.within_noise ? " (within the reference's noise)" : "");
     }
     if (!runtime_rows.empty()) {
       std::printf("\n%-8s %-14s %12s %12s %12s %9s %9s %8s\n", "encoding", "target", "recompose_ms",

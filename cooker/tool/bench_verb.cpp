@@ -76,7 +76,7 @@ uint32_t frames_until_idle(Runtime& rt, uint64_t budget, BudgetRun* run, double*
 
 int verb_bench(Args& args) {
   const std::string path = args.positional("PACK");
-  const bool json = args.flag("json");
+  const bool json = args.flag("--json");
   args.finish();
 
   platform::FileMapping mapping;
@@ -95,7 +95,7 @@ int verb_bench(Args& args) {
   if (rt.open(pack, RuntimeLimits(), &error) != Status::kOk) {
     throw CookError(std::string("bench: ") + error.message);
   }
-  if (!rt.gpu_path()) throw CookError("bench: this driver has no renderable half-float target");
+  if (!rt.gpu_path()) throw CookError("bench: this driver has no renderable float target");
   timed_settle(rt);  // first build (and driver warm-up)
 
   // Full rebuild.
@@ -114,6 +114,7 @@ int verb_bench(Args& args) {
     if (rt.draw_fill_floor(rebuild_texels, &error) != Status::kOk) throw CookError(error.message);
     glFinish();
     floor_ms.push_back(platform::elapsed_ms(t0, platform::monotonic_ns()));
+    timed_settle(rt);  // the floor overwrote the accumulator: the runtime rebuilds (untimed)
   }
   // Incremental light change (intensity x0.5 and back) and object toggle.
   // Texels of the median change: a change that tips the drift bound also runs a rebuild in its
@@ -175,6 +176,9 @@ int verb_bench(Args& args) {
   j["pack"] = path;
   j["renderer"] = renderer ? renderer : "";
   j["lightmap"] = {rt.width(), rt.height()};
+  j["path"] = path_name(rt.path());
+  j["accumulator_rounding"] = {{"unit_roundoff", rt.precision().unit_roundoff},
+                               {"truncates", rt.precision().truncates}};
   j["patches"] = pack.patch_count();
   j["groups"] = pack.group_count();
   j["full_rebuild"] = {{"ms", rebuild}, {"texels", rebuild_texels}, {"draws", rebuild_draws}};
@@ -197,7 +201,7 @@ int verb_bench(Args& args) {
   j["budgets"] = jb;
   j["gpu_memory_bytes"] = {{"atlases", mem.atlases},
                            {"light_map", mem.light_map},
-                           {"intermediate", mem.intermediate},
+                           {"accumulator", mem.accumulator},
                            {"vertex_buffer", mem.vertex_buffer},
                            {"index_buffer", mem.index_buffer}};
   if (json) {
@@ -207,6 +211,8 @@ int verb_bench(Args& args) {
   std::printf("pack %s on %s, light map %ux%u, %u patches in %u groups\n", path.c_str(),
               renderer ? renderer : "?", rt.width(), rt.height(), pack.patch_count(),
               pack.group_count());
+  std::printf("path %s, accumulator unit roundoff %g%s\n", path_name(rt.path()),
+              double(rt.precision().unit_roundoff), rt.precision().truncates ? " (truncates)" : "");
   std::printf("full rebuild     %8.3f ms  (%llu texels, %u draws)\n", rebuild,
               static_cast<unsigned long long>(rebuild_texels), rebuild_draws);
   std::printf("fill-rate floor  %8.3f ms  (same texels, full-target passes): ratio %.2fx\n", floor,
@@ -227,10 +233,10 @@ int verb_bench(Args& args) {
                 r.object_toggle_frames, r.max_frame_ms, r.mean_frame_ms);
   }
   std::printf(
-      "GPU memory: atlases %llu B, light map %llu B, intermediate %llu B, vertices %llu B, "
+      "GPU memory: atlases %llu B, light map %llu B, accumulator %llu B, vertices %llu B, "
       "indices %llu B\n",
       static_cast<unsigned long long>(mem.atlases), static_cast<unsigned long long>(mem.light_map),
-      static_cast<unsigned long long>(mem.intermediate),
+      static_cast<unsigned long long>(mem.accumulator),
       static_cast<unsigned long long>(mem.vertex_buffer),
       static_cast<unsigned long long>(mem.index_buffer));
   return 0;

@@ -14,15 +14,18 @@
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/cook.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/gltf_writer.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/io.h"
 #include "lightpatch/cooker/pack_builder.h"
 #include "lightpatch/cooker/plan_measure.h"
 #include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/reference_integrator.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
+#include "preview_image.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -41,6 +44,17 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   if (o.output.empty()) throw ArgsError("-o needs a file name");
   o.layout.lightmap_size = args.int_option("--lightmap-size", 0, 8, 16384);
   o.layout.texels_per_unit = args.float_option("--texels-per-unit", 0.0f, 1e-6f, 1e6f);
+  std::string unwrap;
+  if (args.option("--unwrap", &unwrap)) {
+    if (unwrap == "auto")
+      o.layout.unwrap = UnwrapMode::kAuto;
+    else if (unwrap == "always")
+      o.layout.unwrap = UnwrapMode::kAlways;
+    else if (unwrap == "never")
+      o.layout.unwrap = UnwrapMode::kNever;
+    else
+      throw ArgsError("--unwrap takes auto, always or never, not '" + unwrap + "'");
+  }
   std::string quality;
   if (args.option("--quality", &quality)) {
     try {
@@ -57,7 +71,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
     try {
       o.bake.integrator = parse_integrator(integrator);
     } catch (const CookError& e) {
-      throw ArgsError(e.what());
+      throw ArgsError(std::string("--integrator: ") + e.what());
     }
   }
   o.bake.gather_rays = args.int_option("--gather-rays", 0, 1, 65536);
@@ -134,15 +148,23 @@ void measure_plan(const CookOptions& o, const PreparedScene& p, Progress& progre
 
 int verb_cook(Args& args) {
   const bool measure = args.flag("--measure-plan");
+  std::string gltf_path;
+  args.option("--write-gltf", &gltf_path);
   CookOptions o = parse_cook_options(args, "OUT.lpk");
   o.scene_path = args.positional("SCENE");
   args.finish();
   if (measure && !o.bake.plan_effects) {
     throw ArgsError("--measure-plan compares the plan with --no-plan; give one of them");
   }
+  if (o.bake.integrator == Integrator::kReference) {
+    throw ArgsError(
+        "--integrator reference bakes single states (bake-state, accuracy), not packs; cook uses "
+        "gather");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  if (!gltf_path.empty()) probe_output_folder(gltf_path);
   Progress progress(o.quiet);
   Report report;
   const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report);
@@ -150,6 +172,10 @@ int verb_cook(Args& args) {
   const std::vector<uint8_t> pack = cook_pack(p, o.bake, progress, report, &maps);
   progress.begin("write", 1);
   write_file_atomic(o.output, pack.data(), pack.size());
+  if (!gltf_path.empty()) {
+    const std::vector<uint8_t> glb = gltf_with_lightmap_uvs(o.scene_path, p.scene, p.layout);
+    write_file_atomic(gltf_path, glb.data(), glb.size());
+  }
   report.stage_time("write", progress.end());
   const double cook_s = since(t0);
   progress.message("wrote " + o.output + " (" + std::to_string(pack.size()) + " bytes, " +
@@ -164,26 +190,73 @@ int verb_cook(Args& args) {
   return 0;
 }
 
+// The standard-error map beside MAP.pfm: MAP.stderr.pfm (".stderr.pfm" appended to other names).
+std::string std_error_path(const std::string& map_path) {
+  const std::string ext = ".pfm";
+  if (map_path.size() > ext.size() &&
+      map_path.compare(map_path.size() - ext.size(), ext.size(), ext) == 0) {
+    return map_path.substr(0, map_path.size() - ext.size()) + ".stderr.pfm";
+  }
+  return map_path + ".stderr.pfm";
+}
+
 int verb_bake_state(Args& args) {
-  std::string state_path;
+  std::string state_path, std_error_out;
   args.option("--state", &state_path);
+  ReferenceOptions ref;
+  ref.samples = args.int_option("--samples", 0, 2, 1 << 20);
+  const bool has_samples = ref.samples != 0;
+  if (!has_samples) ref.samples = kDefaultReferenceSamples;
+  const bool has_std_error = args.option("--std-error", &std_error_out);
+  const float target_percent = args.float_option("--target-noise", 0.0f, 1e-3f, 100.0f);
+  ref.target_noise = 0.01 * target_percent;
+  const PreviewOptions picture = parse_preview_options(args, "--png");
+  if (picture.view == PreviewView::kAtlases)
+    throw ArgsError("--view atlases shows a pack's atlases: use lightpatch preview");
   CookOptions o = parse_cook_options(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
+  const bool reference = o.bake.integrator == Integrator::kReference;
+  if (!reference && (has_samples || has_std_error || target_percent > 0.0f)) {
+    throw ArgsError("--samples, --target-noise and --std-error need --integrator reference");
+  }
+  if (reference) {
+    if (!has_std_error) std_error_out = std_error_path(o.output);
+    if (std_error_out.empty()) throw ArgsError("--std-error needs a file name");
+    if (std_error_out == o.output) throw ArgsError("--std-error names the map itself");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
   probe_output_folder(o.output);
+  if (!picture.png.empty()) probe_output_folder(picture.png);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
+  if (reference) probe_output_folder(std_error_out);
   Progress progress(o.quiet);
   Report report;
   const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report);
-  const FloatImage map = cook_state(p, state, o.bake, progress, report);
+  FloatImage map, std_error;
+  if (reference) {
+    ref.seed = o.bake.seed;
+    ref.threads = o.bake.threads;
+    ReferenceBake rb = cook_reference_state(p, state, ref, progress, report);
+    progress.message("reference: " + std::to_string(rb.samples) + " samples, " +
+                     std::to_string(rb.rays) + " rays, mean relative standard error " +
+                     std::to_string(100.0 * rb.mean_rel_std_error) + " %, noise rel. RMSE " +
+                     std::to_string(100.0 * rb.rel_rmse_noise) + " %");
+    map = std::move(rb.map);
+    std_error = std::move(rb.std_error);
+  } else {
+    map = cook_state(p, state, o.bake, progress, report);
+  }
   progress.begin("write", 1);
   write_pfm(o.output, map);
+  if (reference) write_pfm(std_error_out, std_error);
+  if (!picture.png.empty()) write_preview(picture, map, layout_charts(p.scene, p.layout), nullptr);
   report.stage_time("write", progress.end());
   finish_report(o, report, since(t0));
-  progress.message("wrote " + o.output + " (" + std::to_string(map.width) + "x" +
-                   std::to_string(map.height) + ") in " + std::to_string(since(t0)) + " s");
+  progress.message("wrote " + o.output + (reference ? " and " + std_error_out : std::string()) +
+                   " (" + std::to_string(map.width) + "x" + std::to_string(map.height) + ") in " +
+                   std::to_string(since(t0)) + " s");
   return 0;
 }
 

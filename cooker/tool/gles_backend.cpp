@@ -4,10 +4,12 @@
 // first row is the top row and the returned array needs no flip.
 #include "gles_backend.h"
 
+#include <cstdio>
 #include <cstring>
 #include <string>
 
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/half_float.h"
 #include "lightpatch/platform/egl_context.h"
 #include "lightpatch/runtime.h"
 #include "lightpatch/scene_state.h"
@@ -29,7 +31,7 @@ void settle(Runtime& runtime) {
   if (!runtime.idle()) throw CookError("GLES backend: the runtime did not settle");
 }
 
-void push(const SceneState& state, Runtime& runtime) {
+void push(const PackView& pack, const SceneState& state, Runtime& runtime) {
   for (uint32_t l = 0; l < state.light_count(); ++l) {
     const LightState want = state.light(l);
     const LightState have = runtime.light(l);
@@ -37,7 +39,17 @@ void push(const SceneState& state, Runtime& runtime) {
         std::memcmp(want.color, have.color, sizeof want.color) == 0) {
       continue;
     }
-    if (runtime.set_light(l, want) != Status::kOk) {
+    const Status s = runtime.set_light(l, want);
+    if (s == Status::kOutOfRange) {
+      const Name n = pack.light_name(l);
+      char bound[64];
+      std::snprintf(bound, sizeof bound, "%g", double(kHalfMax * runtime.light_map_scale()));
+      throw CookError("GLES backend: light '" + std::string(n.data, n.length) +
+                      "': the state's light map could exceed " + bound +
+                      ", the largest value the runtime's light map holds for this pack (65504 "
+                      "times its scale); the state is refused");
+    }
+    if (s != Status::kOk) {
       throw CookError("GLES backend: light " + std::to_string(l) + ": value out of range");
     }
   }
@@ -68,7 +80,7 @@ void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& 
   settle(runtime);  // the initial full build of the authored state
   for (const cooker::StateSpec& spec : states) {
     apply_state(spec, pack, &state);
-    push(state, runtime);
+    push(pack, state, runtime);
     settle(runtime);
   }
   const size_t texels = size_t(runtime.width()) * runtime.height();

@@ -21,7 +21,13 @@ constexpr const char* kCookOptionsHelp =
     "  --lightmap-size N      light-map page width in texels (8..16384); the density follows\n"
     "  --texels-per-unit F    texel density in texels per metre (default: about 160k surface\n"
     "                         texels, a page near 512x512; lowered with a note if the charts do\n"
-    "                         not fit a 4096 page)\n"
+    "                         not fit a 4096 page); a node's extras \"lightmapScale\": k\n"
+    "                         multiplies it for that node's meshes\n"
+    "  --unwrap MODE          where light-map UVs come from: auto (default: each node's own\n"
+    "                         TEXCOORD_1 in [0,1] where all its meshes have one, placed by a\n"
+    "                         scale and offset, or one TEXCOORD_1 layout over the whole scene;\n"
+    "                         the cooker unwraps the other nodes), always (ignore TEXCOORD_1),\n"
+    "                         never (every mesh must have TEXCOORD_1)\n"
     "  --quality Q            draft | preview (default) | production: gather rays, indirect\n"
     "                         level and denoising, area-light samples\n"
     "  --no-indirect          direct light only (no bounce)\n"
@@ -48,12 +54,35 @@ constexpr const char* kCookOptionsHelp =
     "  --report REPORT.json   write the cook's decisions, timings and measured errors\n"
     "  -q, --quiet            no progress on stderr\n";
 
+// The picture options of `preview` and `bake-state --png` (preview_image.h).
+#define LIGHTPATCH_PREVIEW_HELP                                                                   \
+  "  --view V               lightmap (default): the light map tone-mapped to sRGB, the 99th\n"    \
+  "                         percentile white, negative texels magenta; atlases (preview only):\n" \
+  "                         every atlas's R, G, B and A planes in grey, side by side; charts:\n"  \
+  "                         each mesh instance's charts in a colour of its own (semi-dynamic\n"   \
+  "                         objects saturated, static meshes pale) shaded by the light;\n"        \
+  "                         checker: the same colours in a texel checker, a texture that shows\n" \
+  "                         the texel density on a model through its light-map UVs\n"             \
+  "  --exposure E           factor on the automatic exposure (default 1)\n"                       \
+  "  --zoom N               pixels per texel, 1..16 (default 1)\n"
+constexpr const char* kPreviewHelp =
+    "Writes a picture of what a pack holds (PNG), from the CPU reference recomposition.\n\n"
+    "options:\n"
+    "  -o, --output OUT.png   the picture (written atomically)\n"
+    "  --state STATE.json     the state to recompose (default: as "
+    "authored)\n" LIGHTPATCH_PREVIEW_HELP;
+
 constexpr const char* kCookHelp =
     "Bakes a glTF 2.0 scene (.gltf/.glb) into a pack: base map, per-light contribution maps,\n"
     "per-object shadow maps and pair corrections, quantized to 8-bit RGBA atlases.\n"
-    "Lights and mesh nodes with extras {\"semiDynamic\": true} become switchable.\n\n"
+    "Lights and mesh nodes with extras {\"semiDynamic\": true} (or 1, as Blender writes it)\n"
+    "become switchable; a mesh node with {\"lightmapExclude\": true} casts shadows but gets no\n"
+    "light map.\n\n"
     "options:\n"
     "  -o, --output OUT.lpk   the pack (written atomically; an existing file survives a failure)\n"
+    "  --write-gltf OUT.glb   also the scene written back with the light-map UVs the cook used\n"
+    "                         in TEXCOORD_1 (uncompressed; buffers and images embedded), so any\n"
+    "                         glTF loader draws it with the runtime's light map\n"
     "  --measure-plan         after the cook, bake and pack twice more, not written: with\n"
     "                         --no-plan, then as planned (both timed warm), and add to the\n"
     "                         report a \"plan\" object: seconds, rays, bytes and\n"
@@ -66,7 +95,23 @@ constexpr const char* kBakeStateHelp =
     "options:\n"
     "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
     "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
-    "                         authored, all on and visible)\n";
+    "                         authored, all on and visible)\n"
+    "  --integrator I         gather (default): the cook's integrator (below);\n"
+    "                         reference: unbiased path tracing from every texel (next-event\n"
+    "                         estimation to every light, MIS for light spheres and emissive\n"
+    "                         surfaces, Russian roulette), the independent reference; it also\n"
+    "                         writes the per-texel standard error and reports its noise\n"
+    "  --samples N            reference: paths per texel (2..1048576, default 256); the noise\n"
+    "                         falls as 1/sqrt(N)\n"
+    "  --target-noise P       reference: stop early, at the first power of two of samples (from\n"
+    "                         64) whose noise is at most P percent relative RMSE; --samples is\n"
+    "                         then the cap (default: off, all --samples)\n"
+    "  --std-error ERR.pfm    reference: where the standard-error map goes (RGB, same units\n"
+    "                         and layout as the map; default MAP.stderr.pfm beside MAP.pfm)\n"
+    "  (with --integrator reference, --seed and --threads apply; the quality, gather, denoise\n"
+    "  and area-sample options do not)\n"
+    "  --png OUT.png          also a picture of the map (the options "
+    "below)\n" LIGHTPATCH_PREVIEW_HELP;
 
 constexpr const char* kPlanHelp =
     "Plans a cook as jobs (one per light group) in a job folder, for cook-job, assemble and\n"
@@ -110,10 +155,13 @@ constexpr const char* kAccuracyHelp =
     "surfaces),\n"
     "texel density (coarser pages) and the 8-bit encoding (linear, square; default auto). Each\n"
     "setting is cooked (bake, finalize, pack), the authored state is recomposed from the pack on\n"
-    "the CPU reference and compared with a reference bake of the same state (bake-state at 4x\n"
-    "production's gather rays and area samples; 2x with --quick). The reference is\n"
-    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm, keyed by the scene, its\n"
-    "layout and the reference options, and reused by later runs.\n\n"
+    "the CPU reference and compared with a reference bake of the same state: by default the\n"
+    "path tracer (bake-state --integrator reference: up to 4096 samples per texel, stopping\n"
+    "once its noise is at most 0.5 % relative RMSE; 64 samples with --quick), whose own noise\n"
+    "the CSV notes give; a row whose error is within that noise is marked\n"
+    "(within_noise) and does not beat other such rows on the Pareto front. The reference is\n"
+    "cached next to the CSV as lightpatch-accuracy-reference-HASH.pfm (and .stderr.pfm), keyed\n"
+    "by the scene, its layout and the reference options, and reused by later runs.\n\n"
     "Errors over the valid light-map texels: relative RMSE (sqrt(sum (x-r)^2 / sum r^2)), max\n"
     "relative error over texels that matter (reference luminance >= 1% of its 99th percentile;\n"
     "max_c |x_c-r_c| / max_c r_c) and PSNR (peak: 99th percentile of the reference). Density\n"
@@ -127,9 +175,17 @@ constexpr const char* kAccuracyHelp =
     "                         rows (8..4096; default 128, 32 with --quick)\n"
     "  --quick                a short sweep for tests and CI: draft, production and draft's two\n"
     "                         encodings at a 32x32 page\n"
-    "  --reference-scale K    the reference's gather rays and area samples are K\n"
-    "                         times production's (1..16; default 4, 2 with --quick); its time\n"
-    "                         grows with K\n"
+    "  --reference-integrator I  reference (default): the path tracer; cook: the cook's own\n"
+    "                         integrator at high settings (the former reference; its noise is\n"
+    "                         not estimated)\n"
+    "  --reference-samples N  path tracer: samples per texel at most (2..1048576; default 4096,\n"
+    "                         64 with --quick); its noise falls as 1/sqrt(N), its time grows\n"
+    "                         with N\n"
+    "  --reference-noise P    path tracer: stop at the first power of two of samples (from 64)\n"
+    "                         whose noise is at most P percent relative RMSE (default 0.5; 0 =\n"
+    "                         all --reference-samples; off with --quick)\n"
+    "  --reference-scale K    --reference-integrator cook: gather rays and area samples K times\n"
+    "                         production's (1..16; default 4, 2 with --quick)\n"
     "  --runtime-csv OUT.csv  also the runtime: the encoding rows' bake packed with each\n"
     "                         encoding (auto, linear, square) and recomposed on the CPU reference\n"
     "                         (float32 target; median rebuild time), against the float "
@@ -146,8 +202,9 @@ const Verb kVerbs[] = {
     {"cook", lightpatch::tool::verb_cook,
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
-     "[--measure-plan] [--integrator gather] [--gather-rays N] [--indirect-level K] "
-     "[--denoise N] [--area-samples N] [--output-step E] [--seed N] [--threads N] [--quiet]",
+     "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
+     "[--gather-rays N] [--indirect-level K] [--denoise N] [--area-samples N] [--output-step E] "
+     "[--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,
@@ -156,7 +213,9 @@ const Verb kVerbs[] = {
     {"assemble", lightpatch::tool::verb_assemble,
      "assemble DIR -o OUT.lpk [--threads N] [--report REPORT.json] [--quiet]", kAssembleHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
-     "bake-state SCENE [--state STATE.json] -o MAP.pfm [cook's options]", kBakeStateHelp},
+     "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator gather|reference] "
+     "[--samples N] [--std-error ERR.pfm] [cook's options]",
+     kBakeStateHelp},
     {"info", lightpatch::tool::verb_info, "info PACK [--json]",
      "Prints a pack's lights, objects, groups, patches, atlases and bytes.\n\n"
      "options:\n  --json   machine-readable output\n"},
@@ -172,13 +231,19 @@ const Verb kVerbs[] = {
      "  --states STATES.jsonl  states applied in order through the incremental path; the map\n"
      "                         after the last is written\n"
      "  --backend cpu|gles     CPU reference (default) or OpenGL ES 3 through EGL surfaceless\n"},
+    {"preview", lightpatch::tool::verb_preview,
+     "preview PACK [--state STATE.json] -o OUT.png [--view lightmap|atlases|charts|checker] "
+     "[--exposure E] [--zoom N]",
+     kPreviewHelp},
     {"bench", lightpatch::tool::verb_bench, "bench PACK [--json]",
      "Times the GLES recomposition of a pack (full rebuild, single changes) against a fill-rate\n"
      "floor measured in the same run, and lists the GPU memory it holds.\n\n"
      "options:\n  --json   machine-readable output\n"},
     {"accuracy", lightpatch::tool::verb_accuracy,
      "accuracy SCENE --csv OUT.csv --plot OUT.png [--runtime-csv OUT.csv [--gles]] "
-     "[--lightmap-size N] [--quick] [--reference-scale K] [--no-cache] [--seed N] [--threads N] "
+     "[--lightmap-size N] [--quick] [--reference-integrator reference|cook] "
+     "[--reference-samples N] [--reference-noise P] [--reference-scale K] [--no-cache] [--seed N] "
+     "[--threads N] "
      "[--quiet]",
      kAccuracyHelp},
 };

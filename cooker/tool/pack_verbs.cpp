@@ -1,4 +1,5 @@
-// The pack verbs: `info`, `verify` and `recompose` (README.md; DESIGN.md, Command line).
+// The pack verbs: `info`, `verify`, `recompose` and `preview` (README.md; DESIGN.md, Command
+// line).
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -15,6 +16,7 @@
 #include "lightpatch/pack_view.h"
 #include "lightpatch/platform/file_mapping.h"
 #include "lightpatch/scene_state.h"
+#include "preview_image.h"
 #include "state_apply.h"
 #include "verbs.h"
 
@@ -113,6 +115,23 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   }
   j["atlases"] = atlases;
   j["meshes"] = p.mesh_count();
+  // Each baked mesh instance; those laid out by their own TEXCOORD_1 with the scale and offset a
+  // game applies to it (uv = TEXCOORD_1 * xy + zw).
+  nlohmann::ordered_json instances = nlohmann::ordered_json::array();
+  for (uint32_t i = 0; i < p.mesh_count(); ++i) {
+    const pack::MeshRecord& m = p.mesh(i);
+    nlohmann::ordered_json e = {{"name", name_string(p.mesh_name(i))},
+                                {"node", m.node_index},
+                                {"primitive", m.primitive},
+                                {"vertices", m.vertex_count},
+                                {"triangles", m.index_count / 3}};
+    if (m.flags & pack::kMeshFlagTexcoord1) {
+      const float* so = m.lightmap_scale_offset;
+      e["lightmap_scale_offset"] = {so[0], so[1], so[2], so[3]};
+    }
+    instances.push_back(e);
+  }
+  j["mesh_instances"] = instances;
   nlohmann::ordered_json sections = nlohmann::ordered_json::object();
   const pack::SectionEntry* entries =
       reinterpret_cast<const pack::SectionEntry*>(p.bytes() + sizeof(pack::Header));
@@ -125,6 +144,40 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["conventional_lightmap_bytes"] = lightmap_bytes;
   j["atlas_to_lightmap_ratio"] = double(atlas_bytes) / double(lightmap_bytes);
   return j;
+}
+
+// The light map after `states` (none: the authored state), on the CPU reference or GLES.
+cooker::FloatImage recomposed(const PackView& view, const std::vector<cooker::StateSpec>& states,
+                              bool gles) {
+  cooker::FloatImage map(int(view.lightmap_width()), int(view.lightmap_height()), 3);
+  if (gles) {
+    std::vector<float> rgb;
+    recompose_gles(view, states, &rgb);
+    if (rgb.size() != map.data.size())
+      throw CookError("GLES backend returned a map of the wrong size");
+    map.data = std::move(rgb);
+  } else {
+    Error error;
+    SceneState state;
+    CpuRecomposer recomposer;
+    if (state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
+      throw CookError(std::string("recompose: ") + error.message);
+    }
+    // Every state is relative to the authored one (DESIGN.md, Scene state); the first full build
+    // is of the authored state, then each state goes through the incremental path.
+    recomposer.rebuild(state);
+    for (const cooker::StateSpec& spec : states) {
+      state.reset_to_authored(view);
+      apply_state(spec, view, &state);
+      if (recomposer.apply(state) != Status::kOk)
+        throw CookError("recompose: state does not match the pack");
+    }
+    std::copy(recomposer.rgb(), recomposer.rgb() + map.data.size(), map.data.begin());
+  }
+  for (float v : map.data) {
+    if (!std::isfinite(v)) throw CookError("recompose: the light map has a non-finite texel");
+  }
+  return map;
 }
 
 }  // namespace
@@ -203,7 +256,7 @@ int verb_recompose(Args& args) {
   args.option("--state", &state_path);
   args.option("--states", &states_path);
   if (!args.option("--backend", &backend)) backend = "cpu";
-  args.option("-o", &output);
+  if (!args.option("-o", &output)) args.option("--output", &output);
   const std::string path = args.positional("PACK");
   args.finish();
   if (output.empty()) throw ArgsError("-o MAP.pfm is required");
@@ -218,35 +271,26 @@ int verb_recompose(Args& args) {
   OpenPack pack(path);
   const PackView& view = pack.view;
 
-  cooker::FloatImage map(int(view.lightmap_width()), int(view.lightmap_height()), 3);
-  if (backend == "gles") {
-    std::vector<float> rgb;
-    recompose_gles(view, states, &rgb);
-    if (rgb.size() != map.data.size())
-      throw CookError("GLES backend returned a map of the wrong size");
-    map.data = std::move(rgb);
-  } else {
-    Error error;
-    SceneState state;
-    CpuRecomposer recomposer;
-    if (state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
-      throw CookError(std::string("recompose: ") + error.message);
-    }
-    // Every state is relative to the authored one (DESIGN.md, Scene state); the first full build
-    // is of the authored state, then each state goes through the incremental path.
-    recomposer.rebuild(state);
-    for (const cooker::StateSpec& spec : states) {
-      state.reset_to_authored(view);
-      apply_state(spec, view, &state);
-      if (recomposer.apply(state) != Status::kOk)
-        throw CookError("recompose: state does not match the pack");
-    }
-    std::copy(recomposer.rgb(), recomposer.rgb() + map.data.size(), map.data.begin());
-  }
-  for (float v : map.data) {
-    if (!std::isfinite(v)) throw CookError("recompose: the light map has a non-finite texel");
-  }
+  const cooker::FloatImage map = recomposed(view, states, backend == "gles");
   cooker::write_pfm(output, map);
+  return 0;
+}
+
+int verb_preview(Args& args) {
+  std::string state_path;
+  args.option("--state", &state_path);
+  PreviewOptions o = parse_preview_options(args, nullptr);
+  if (!args.option("-o", &o.png)) args.option("--output", &o.png);
+  const std::string path = args.positional("PACK");
+  args.finish();
+  if (o.png.empty()) throw ArgsError("-o OUT.png is required");
+  std::vector<cooker::StateSpec> states;
+  if (!state_path.empty()) states.push_back(cooker::load_state_file(state_path));
+  OpenPack pack(path);
+  const cooker::FloatImage map = o.view == PreviewView::kAtlases
+                                     ? cooker::FloatImage(1, 1, 3)
+                                     : recomposed(pack.view, states, false);
+  write_preview(o, map, pack_charts(pack.view), &pack.view);
   return 0;
 }
 

@@ -242,9 +242,13 @@ std::vector<uint8_t> render_plot_png(const PlotSpec& spec) {
   c.ring(lx + 6, ly + 7, 7.0, 9.5, kFront);
   c.text(lx + 20, ly, spec.front_label, kText);
 
+  return encode_png(c.width(), c.height(), c.rgb());
+}
+
+std::vector<uint8_t> encode_png(int width, int height, const std::vector<uint8_t>& rgb) {
   std::vector<uint8_t> png;
-  if (!stbi_write_png_to_func(on_png, &png, c.width(), c.height(), 3, c.rgb().data(),
-                              c.width() * 3)) {
+  if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3 ||
+      !stbi_write_png_to_func(on_png, &png, width, height, 3, rgb.data(), width * 3)) {
     throw std::runtime_error("PNG encoding failed");
   }
   return png;

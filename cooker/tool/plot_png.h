@@ -29,4 +29,7 @@ struct PlotSpec {
 // Renders the plot (RGB) and encodes it as PNG. Throws std::runtime_error if encoding fails.
 std::vector<uint8_t> render_plot_png(const PlotSpec& spec);
 
+// Encodes width x height RGB8 pixels (rows top to bottom) as PNG. Throws std::runtime_error.
+std::vector<uint8_t> encode_png(int width, int height, const std::vector<uint8_t>& rgb);
+
 }  // namespace lightpatch::tool

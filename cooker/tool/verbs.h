@@ -11,6 +11,7 @@ int verb_bake_state(Args& args);  // cook_verbs.cpp
 int verb_info(Args& args);        // pack_verbs.cpp
 int verb_verify(Args& args);      // pack_verbs.cpp
 int verb_recompose(Args& args);   // pack_verbs.cpp
+int verb_preview(Args& args);     // pack_verbs.cpp
 int verb_bench(Args& args);       // bench_verb.cpp
 int verb_accuracy(Args& args);    // accuracy_verb.cpp
 int verb_plan(Args& args);        // farm_verbs.cpp

@@ -104,7 +104,7 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
   for (const char* column :
        {"setting", "knob", "quality", "gather_rays", "indirect_level", "denoise", "area_samples",
         "lightmap_size", "encoding", "cook_s", "rays", "pack_bytes", "rel_rmse", "max_rel_error",
-        "psnr_db", "pareto"}) {
+        "psnr_db", "pareto", "rel_rmse_excess", "within_noise"}) {
     EXPECT_NE(std::find(csv.header.begin(), csv.header.end(), column), csv.header.end()) << column;
   }
   // --quick: draft, production, and draft with each fixed encoding.
@@ -126,6 +126,17 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
     pareto += row.at("pareto") == "1" ? 1 : 0;
   }
   EXPECT_GE(pareto, 1);
+  // The path-traced reference states its own noise; a row's excess error is below its rel_rmse.
+  bool noise_noted = false;
+  for (const std::string& n : csv.notes) {
+    noise_noted = noise_noted || n.find("reference noise: relative RMSE") != n.npos;
+  }
+  EXPECT_TRUE(noise_noted);
+  for (const auto& row : csv.rows) {
+    EXPECT_LE(number(row, "rel_rmse_excess"), number(row, "rel_rmse"));
+    EXPECT_TRUE(row.at("within_noise") == "0" || row.at("within_noise") == "1");
+  }
+  EXPECT_NE(first.err.find("reference: baking (path tracing"), std::string::npos) << first.err;
   ASSERT_TRUE(by_name.count("preset=draft"));
   ASSERT_TRUE(by_name.count("preset=production"));
   const double draft = number(*by_name["preset=draft"], "rel_rmse");
@@ -182,7 +193,8 @@ TEST(Accuracy, HelpListsTheOptions) {
   EXPECT_EQ(r.code, 0);
   for (const char* option :
        {"--csv", "--plot", "--runtime-csv", "--gles", "--lightmap-size", "--quick",
-        "--reference-scale", "--no-cache", "--seed", "--threads", "--quiet"}) {
+        "--reference-integrator", "--reference-samples", "--reference-noise", "--reference-scale",
+        "--no-cache", "--seed", "--threads", "--quiet"}) {
     EXPECT_NE(r.out.find(option), std::string::npos) << option << " not in: " << r.out;
   }
 }
@@ -202,6 +214,15 @@ TEST(Accuracy, BadOptionsFailWithAMessageAndWriteNothing) {
       {{"accuracy", scene, "--csv", csv, "--plot", csv}, "same file"},
       {{"accuracy", scene, "--csv", csv, "--plot", png, "--runtime-csv", csv}, "same file"},
       {{"accuracy", scene, "--csv", csv, "--plot", png, "--gles"}, "--runtime-csv"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--reference-integrator", "vpl"},
+       "--reference-integrator"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--reference-scale", "2"},
+       "--reference-scale"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--reference-integrator", "cook",
+        "--reference-samples", "64"},
+       "--reference-samples"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--reference-samples", "1"},
+       "--reference-samples"},
       {{"accuracy", dir.file("missing.glb"), "--csv", csv, "--plot", png, "--quick"},
        "missing.glb"},
       {{"accuracy", dir.file("broken.glb"), "--csv", csv, "--plot", png, "--quick"}, "broken.glb"},

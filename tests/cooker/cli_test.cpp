@@ -172,6 +172,69 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
         "--report", "--quiet", "--no-plan", "--measure-plan"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
+  const ToolRun bake_state = expect_success({"bake-state", "--help"});
+  for (const char* option :
+       {"--state", "--integrator", "--samples", "--target-noise", "--std-error", "--quality"}) {
+    EXPECT_NE(bake_state.out.find(option), std::string::npos) << option << " undocumented:\n"
+                                                              << bake_state.out;
+  }
+}
+
+// bake-state --integrator reference: the map and its standard error beside it, same layout as
+// the cook's integrator, its noise in the report; bad combinations refused, nothing written.
+TEST(Cli, BakeStateReferenceWritesTheMapAndItsStandardError) {
+  ScratchDir dir;
+  small_room(0.1f).write(dir.file("room.glb"));
+  const std::string scene = dir.file("room.glb");
+  const std::vector<std::string> small = {"--lightmap-size", "32", "--quiet"};
+  expect_success(
+      cat({"bake-state", scene, "-o", dir.file("cook.pfm"), "--quality", "draft"}, small));
+  expect_success(cat({"bake-state", scene, "-o", dir.file("ref.pfm"), "--integrator", "reference",
+                      "--samples", "8", "--report", dir.file("ref.json")},
+                     small));
+  expect_success(cat({"bake-state", scene, "-o", dir.file("ref2.pfm"), "--integrator", "reference",
+                      "--samples", "8", "--std-error", dir.file("noise.pfm")},
+                     small));
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"cook.pfm", "noise.pfm", "ref.json", "ref.pfm",
+                                                     "ref.stderr.pfm", "ref2.pfm", "room.glb"}));
+  const cooker::FloatImage cook = cooker::read_pfm(dir.file("cook.pfm"));
+  const cooker::FloatImage ref = cooker::read_pfm(dir.file("ref.pfm"));
+  const cooker::FloatImage err = cooker::read_pfm(dir.file("ref.stderr.pfm"));
+  EXPECT_EQ(ref.width, cook.width);
+  EXPECT_EQ(ref.height, cook.height);
+  EXPECT_EQ(err.width, ref.width);
+  EXPECT_EQ(err.channels, 3);
+  EXPECT_TRUE(read_bytes(dir.file("ref.pfm")) == read_bytes(dir.file("ref2.pfm")));
+  EXPECT_TRUE(read_bytes(dir.file("ref.stderr.pfm")) == read_bytes(dir.file("noise.pfm")));
+  double lit = 0.0, noisy = 0.0;
+  for (size_t i = 0; i < ref.data.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(ref.data[i]) && std::isfinite(err.data[i]));
+    ASSERT_GE(err.data[i], 0.0f);
+    lit += ref.data[i];
+    noisy += err.data[i];
+  }
+  EXPECT_GT(lit, 0.0);
+  EXPECT_GT(noisy, 0.0);  // the room has bounce light: 8 samples cannot be exact
+  const nlohmann::json report = nlohmann::json::parse(read_bytes(dir.file("ref.json")));
+  ASSERT_TRUE(report.contains("reference")) << report.dump();
+  EXPECT_EQ(report["reference"]["samples"], 8);
+  EXPECT_GT(report["reference"]["rays"].get<double>(), 0.0);
+  EXPECT_GT(report["reference"]["mean_rel_std_error"].get<double>(), 0.0);
+  EXPECT_GT(report["reference"]["rel_rmse_noise"].get<double>(), 0.0);
+
+  const std::string map = dir.file("ref.pfm");
+  expect_failure(dir, cat({"bake-state", scene, "-o", map, "--integrator", "photon"}, small),
+                 "--integrator", map);
+  expect_failure(dir, cat({"bake-state", scene, "-o", map, "--samples", "8"}, small), "--samples",
+                 map);
+  expect_failure(
+      dir,
+      cat({"bake-state", scene, "-o", map, "--integrator", "reference", "--samples", "1"}, small),
+      "--samples", map);
+  expect_failure(
+      dir,
+      cat({"bake-state", scene, "-o", map, "--integrator", "reference", "--std-error", map}, small),
+      "--std-error", map);
 }
 
 TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {

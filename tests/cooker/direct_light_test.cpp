@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <vector>
 
 #include "direct_light.h"
+#include "indirect_test_scenes.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/tracer.h"
 #include "test_scenes.h"
@@ -207,22 +210,11 @@ TEST(DirectLight, SphereLightGivesPenumbraAndMatchesPointFarAway) {
 }
 
 TEST(DirectLight, EmissiveSquareOverPointMatchesFormFactor) {
-  Scene scene;
-  Material plain;
-  Material glow;
-  glow.emissive = glm::vec3(1.0f);
-  scene.materials = {plain, glow};
-  add_quad(scene, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
-  // A 2 x 2 emitter 1 m above the texel, facing down.
-  add_quad(scene, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}, "panel", -1, 1);
-  test::finish(scene);
+  const Scene scene = test::emissive_panel(glm::vec3(1.0f), 0.8f);
   const TexelSet texels =
       grid_texels(1, 1, {-1e-3f, 0, -1e-3f}, {2e-3f, 0, 0}, {0, 0, 2e-3f}, {0, 1, 0});
   const BakedMaps maps = bake(scene, texels, 16384);
-  // Parallel rectangle over a corner (a = b = c = 1): F = (1/pi) * (1/sqrt2) * atan(1/sqrt2);
-  // the centre sees four such; E = pi * L * F_total.
-  const double fc = (1.0 / M_PI) * (1.0 / std::sqrt(2.0)) * std::atan(1.0 / std::sqrt(2.0));
-  const double want = M_PI * 4.0 * fc;
+  const double want = test::emissive_panel_irradiance(1.0);
   const double got = maps.base.at(0, 0, 1);
   std::printf("emissive: got %.5f want %.5f (error %.3g)\n", got, want,
               std::fabs(got - want) / want);
@@ -263,6 +255,79 @@ TEST(DirectLight, RangeWindowAndSpotFalloffFollowTheSpec) {
   EXPECT_NEAR(e, 0.25f * (1.0f - std::pow(2.0f / 3.0f, 4.0f)), 1e-6f);
   EXPECT_EQ(punctual_irradiance(p, p.position, {0, 0, 0}, {0, -1, 0}, 0.0f), 0.0f);
   EXPECT_FLOAT_EQ(light_reach(p, 1e-6f), 3.0f);
+}
+
+// The horizon-clipped cosine integral of a cone, against midpoint quadrature over the cone.
+TEST(DirectLight, SphereCosineIntegralMatchesQuadrature) {
+  for (float sigma : {0.05f, 0.4f, 1.0f, 1.5f}) {
+    for (float theta : {0.0f, 0.7f, 1.3f, 1.57f, 1.9f, 2.6f}) {
+      const glm::vec3 n(0, 0, 1);
+      const glm::vec3 axis(std::sin(theta), 0, std::cos(theta));
+      const glm::vec3 t(std::cos(theta), 0, -std::sin(theta)), b(0, 1, 0);
+      constexpr int kRings = 300, kSteps = 300;
+      const double cos_max = std::cos(double(sigma));
+      double sum = 0.0;
+      for (int i = 0; i < kRings; ++i) {
+        const double c = 1.0 - (i + 0.5) / kRings * (1.0 - cos_max);
+        const double sn = std::sqrt(std::max(0.0, 1.0 - c * c));
+        for (int j = 0; j < kSteps; ++j) {
+          const double phi = 2.0 * M_PI * (j + 0.5) / kSteps;
+          const glm::vec3 w =
+              axis * float(c) + t * float(sn * std::cos(phi)) + b * float(sn * std::sin(phi));
+          sum += std::max(0.0f, glm::dot(n, w));
+        }
+      }
+      const double want = sum * 2.0 * M_PI * (1.0 - cos_max) / (double(kRings) * kSteps);
+      const double s = std::sin(double(sigma));
+      const double got = sphere_cosine_integral(std::cos(theta), float(s * s));
+      EXPECT_NEAR(got, want, 1e-4 + 2e-4 * want) << "sigma " << sigma << " theta " << theta;
+    }
+  }
+}
+
+// The cook's sampler of a sphere light (its visible cone, stratified) against the closed form:
+// I cos / d^2 where the sphere is wholly above the horizon (facing and tilted receivers), the
+// clipped integral where it straddles it, pi L = I / r^2 where it touches the receiver; one
+// sample gives the closed form itself.
+TEST(DirectLight, SphereLightSamplerMatchesClosedForms) {
+  Light l = test::point_light("globe", {0.0f, 1.0f, 0.0f}, 7.0f);
+  l.radius = 0.3f;
+  // sample_punctual is for intensity 1 (callers scale by colour * intensity).
+  const float radiance = 1.0f / (3.14159265f * l.radius * l.radius);
+  struct Case {
+    glm::vec3 p, n;
+  };
+  const float tilt = 1.3f;  // radians; the sphere (half angle ~0.3 at d = 1) straddles it
+  const Case cases[] = {
+      {{0, 0, 0}, {0, 1, 0}},                                     // facing, d = 1
+      {{0.4f, 0, 0}, glm::normalize(glm::vec3(-0.3f, 1, 0.2f))},  // tilted, above the horizon
+      {{0, 0, 0}, {-std::sin(tilt), std::cos(tilt), 0}},          // straddling the horizon
+      {{0, 0.7f, 0}, {0, 1, 0}},                                  // touching: d = r
+      {{0.1f, 0.75f, 0}, glm::normalize(glm::vec3(1, 1, 0))},     // inside the sphere
+  };
+  for (const Case& c : cases) {
+    const glm::vec3 to = l.position - c.p;
+    const float d = glm::length(to);
+    const float s2 = d > l.radius ? (l.radius / d) * (l.radius / d) : 1.0f;
+    const double want = d > l.radius ? radiance * sphere_cosine_integral(glm::dot(c.n, to / d), s2)
+                                     : radiance * M_PI;  // inside: the sphere fills the hemisphere
+    if (d > l.radius && glm::dot(c.n, to / d) * glm::dot(c.n, to / d) >= s2) {
+      EXPECT_NEAR(want, glm::dot(c.n, to / d) / (d * d), 1e-4 * want);  // a point's law
+    }
+    for (int samples : {1, 1024}) {
+      std::vector<LightSample> out;
+      ASSERT_TRUE(sample_punctual(l, c.p, c.n, samples, 99, 1e-5f, 100.0f, 0.0f, out));
+      double got = 0.0;
+      for (const LightSample& s : out) {
+        got += s.irradiance.x;
+        EXPECT_GE(s.tmax, s.tmin);
+        EXPECT_TRUE(std::isfinite(s.irradiance.x));
+      }
+      std::printf("sphere light at d = %.2f, %4d samples: %.5f vs %.5f (%+.3f %%)\n", d, samples,
+                  got, want, 100.0 * (got - want) / want);
+      EXPECT_NEAR(got, want, (samples == 1 ? 1e-4 : 3e-3) * want);
+    }
+  }
 }
 
 }  // namespace

@@ -313,19 +313,20 @@ void expect_layout_error(const std::string& path, const std::vector<std::string>
   }
 }
 
-TEST(ImportErrors, OverlappingTexcoord1NamesTheMesh) {
+TEST(ImportErrors, OverlappingTexcoord1InOneNodeNamesTheMesh) {
   ScratchDir dir;
-  // Two meshes whose light-map UVs share area.
+  // Two primitives of one node (one mesh, two materials) whose light-map UVs share area. (Two
+  // nodes may overlap: each node's UVs are its own, placed by scale and offset.)
   {
     sg::SceneBuilder b;
     sg::Geometry a = sg::make_quad({0, 0, 0}, {1, 0, 0}, {1, 0, -1}, {0, 0, -1});
     a.uv1 = {{0.0f, 0.0f}, {0.6f, 0.0f}, {0.0f, 0.6f}, {0.6f, 0.6f}};
     sg::Geometry c = sg::make_quad({2, 0, 0}, {3, 0, 0}, {3, 0, -1}, {2, 0, -1});
     c.uv1 = {{0.4f, 0.4f}, {1.0f, 0.4f}, {0.4f, 1.0f}, {1.0f, 1.0f}};
-    b.add_mesh_node("table", a, -1);
-    b.add_mesh_node("chair", c, -1);
+    b.add_node({.name = "table", .mesh = b.add_mesh("table", {{a, -1}, {c, -1}})});
     b.write(dir.file("two.glb"));
-    expect_layout_error(dir.file("two.glb"), {"TEXCOORD_1", "'chair'", "'table'", "overlap"});
+    expect_layout_error(dir.file("two.glb"), {"TEXCOORD_1", "'table' (primitive 1)",
+                                              "'table' (primitive 0)", "overlap"});
   }
   // One mesh folded onto itself, on an unnamed node: the message still says which one.
   {

@@ -337,7 +337,9 @@ TEST(ImportGltf, ExtrasAcceptBlenderStyleNumbersAndIgnoreFalse) {
     if (n["name"] == "spot") n["extras"] = {{"semiDynamic", true}, {"lightRadius", 0.1}};
   }
   for (auto& n : nodes) {
-    if (n["name"] == "floor") n["extras"] = {{"castShadows", 0}};  // Blender's false
+    if (n["name"] == "floor")
+      n["extras"] = {{"castShadows", 0}, {"lightmapScale", 0.25}, {"lightmapExclude", 0}};
+    if (n["name"] == "crate") n["extras"]["lightmapExclude"] = 1;
   }
   const Scene s = cooker::import_gltf(write_glb(dir, "extras", parts));
   ASSERT_EQ(s.objects.size(), 1u);
@@ -347,6 +349,44 @@ TEST(ImportGltf, ExtrasAcceptBlenderStyleNumbersAndIgnoreFalse) {
   EXPECT_TRUE(mesh_named(s, "crate").cast_shadows);  // absent: casts shadows
   EXPECT_TRUE(light_named(s, "spot").semi_dynamic);
   EXPECT_FLOAT_EQ(light_named(s, "spot").radius, 0.1f);
+  EXPECT_FLOAT_EQ(mesh_named(s, "floor").lightmap_scale, 0.25f);
+  EXPECT_FALSE(mesh_named(s, "floor").lightmap_exclude);
+  EXPECT_TRUE(mesh_named(s, "crate").lightmap_exclude);
+  EXPECT_FLOAT_EQ(mesh_named(s, "pillar").lightmap_scale, 1.0f);
+}
+
+TEST(ImportGltf, ExtrasOfTheWrongTypeAreErrorsNamingTheNode) {
+  ScratchDir dir;
+  // A string where a boolean belongs would otherwise bake the node static without a word.
+  const std::vector<std::pair<nlohmann::ordered_json, std::string>> cases = {
+      {{{"semiDynamic", "true"}}, "extras.semiDynamic"},
+      {{{"semiDynamic", 2}}, "extras.semiDynamic"},
+      {{{"lightmapExclude", "yes"}}, "extras.lightmapExclude"},
+      {{{"lightmapScale", 0}}, "extras.lightmapScale"},
+      {{{"lightmapScale", "2"}}, "extras.lightmapScale"}};
+  for (const auto& [extras, word] : cases) {
+    GltfParts parts = parts_of(small_room());
+    for (auto& n : parts.json["nodes"])
+      if (n["name"] == "crate") n["extras"] = extras;
+    const std::string path = write_glb(dir, "bad_extras", parts);
+    try {
+      cooker::import_gltf(path);
+      ADD_FAILURE() << extras.dump() << " accepted";
+    } catch (const cooker::CookError& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'crate'"), std::string::npos) << e.what();
+    }
+  }
+  // On a light too.
+  GltfParts parts = parts_of(small_room());
+  for (auto& n : parts.json["nodes"])
+    if (n["name"] == "lamp") n["extras"]["semiDynamic"] = "on";
+  try {
+    cooker::import_gltf(write_glb(dir, "bad_light", parts));
+    ADD_FAILURE() << "semiDynamic \"on\" accepted on a light";
+  } catch (const cooker::CookError& e) {
+    EXPECT_NE(std::string(e.what()).find("'lamp'"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ImportGltf, DracoDecodesToTheSameSurfaceWithinQuantization) {

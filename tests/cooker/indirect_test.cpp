@@ -25,7 +25,7 @@ struct FurnaceResult {
 // Total incident flux sum(E * area) over the inner faces of the closed box, light of 1 cd.
 FurnaceResult furnace(float rho, const BakeOptions& o, int n, bool semi = false) {
   Scene s = test::furnace_box(rho);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f, semi)};
+  s.lights = {test::furnace_lamp(semi)};
   TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
   texels.albedo.assign(texels.albedo.size(), glm::vec3(rho));  // gathering reads texel albedo
   auto tracer = make_embree_tracer(s);

@@ -1,5 +1,7 @@
 #include "indirect_test_scenes.h"
 
+#include <cmath>
+
 namespace lightpatch::test {
 
 using namespace cooker;
@@ -12,6 +14,29 @@ Scene furnace_box(float rho) {
   add_closed_room(s, {-1, -1, -1}, {1, 1, 1}, 0.2f, "box");
   finish(s);
   return s;
+}
+
+Light furnace_lamp(bool semi_dynamic) {
+  return point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f, semi_dynamic);
+}
+
+Scene emissive_panel(const glm::vec3& radiance, float panel_albedo) {
+  Scene scene;
+  Material plain;
+  Material glow;
+  glow.albedo = glm::vec3(panel_albedo);
+  glow.emissive = radiance;
+  scene.materials = {plain, glow};
+  add_quad(scene, {-5, 0, -5}, {-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, "floor");
+  add_quad(scene, {-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}, "panel", -1, 1);
+  finish(scene);
+  return scene;
+}
+
+double emissive_panel_irradiance(double radiance) {
+  const double pi = 3.14159265358979323846;
+  const double corner = (1.0 / pi) * (1.0 / std::sqrt(2.0)) * std::atan(1.0 / std::sqrt(2.0));
+  return pi * 4.0 * corner * radiance;
 }
 
 namespace {

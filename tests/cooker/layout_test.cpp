@@ -153,10 +153,10 @@ TEST(Layout, DensityGivesChartSizeAndIsLoweredToFitWithANote) {
   EXPECT_LE(small.regions[0].rect.x + small.regions[0].rect.w, 24);
 }
 
-TEST(Layout, VerbatimTexcoord1IsUsedAndOverlapsAreRejectedByName) {
+TEST(Layout, Texcoord1WholeSceneOrPerNodeAndOverlapsInOneMeshRejectedByName) {
   Scene s;
   const int a = test::add_quad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, "left");
-  const int b = test::add_quad(s, {2, 0, 0}, {2, 0, 1}, {3, 0, 1}, {3, 0, 0}, "right");
+  const int b = test::add_quad(s, {2, 0, 0}, {2, 0, 1}, {4, 0, 1}, {4, 0, 0}, "right");
   s.meshes[size_t(a)].uv1 = {{0.05f, 0.05f}, {0.05f, 0.45f}, {0.45f, 0.45f}, {0.45f, 0.05f}};
   s.meshes[size_t(b)].uv1 = {{0.55f, 0.55f}, {0.55f, 0.95f}, {0.95f, 0.95f}, {0.95f, 0.55f}};
   test::finish(s);
@@ -166,9 +166,47 @@ TEST(Layout, VerbatimTexcoord1IsUsedAndOverlapsAreRejectedByName) {
   EXPECT_TRUE(l.verbatim_uv1);
   EXPECT_EQ(l.width, 64);
   EXPECT_EQ(l.meshes[size_t(a)].uv, s.meshes[size_t(a)].uv1);
+  EXPECT_EQ(l.meshes[size_t(a)].uv1_scale_offset, glm::vec4(1, 1, 0, 0));
   ASSERT_EQ(l.regions.size(), 2u);
 
-  s.meshes[size_t(b)].uv1 = {{0.25f, 0.25f}, {0.25f, 0.6f}, {0.6f, 0.6f}, {0.6f, 0.25f}};
+  // Each mesh's UVs over the whole square, as Blender's Lightmap Pack writes them: each placed in
+  // its own rectangle by one scale and offset, sized by its area (the right quad is twice the
+  // left one), inside the page and apart.
+  s.meshes[size_t(a)].uv1 = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+  s.meshes[size_t(b)].uv1 = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+  o.lightmap_size = 0;
+  o.texels_per_unit = 16.0f;
+  const Layout per = build_layout(s, o);
+  EXPECT_FALSE(per.verbatim_uv1);
+  EXPECT_EQ(per.uv1_regions, 2);
+  ASSERT_EQ(per.regions.size(), 2u);
+  for (int m : {a, b}) {
+    const MeshLayout& ml = per.meshes[size_t(m)];
+    EXPECT_TRUE(ml.from_uv1);
+    for (size_t v = 0; v < ml.uv.size(); ++v) {
+      const glm::vec4 so = ml.uv1_scale_offset;
+      EXPECT_EQ(ml.uv[v],
+                s.meshes[size_t(m)].uv1[v] * glm::vec2(so.x, so.y) + glm::vec2(so.z, so.w));
+      const glm::vec2 px = ml.uv[v] * glm::vec2(float(per.width), float(per.height));
+      const Rect& r = per.regions[size_t(m)].rect;
+      EXPECT_GE(px.x, float(r.x + o.border_texels) - 1e-3f);
+      EXPECT_LE(px.x, float(r.x + r.w - o.border_texels) + 1e-3f);
+      EXPECT_GE(px.y, float(r.y + o.border_texels) - 1e-3f);
+      EXPECT_LE(px.y, float(r.y + r.h - o.border_texels) + 1e-3f);
+    }
+  }
+  // 16 texels per metre: the 1 m quad spans 16 texels, the 2 m x 1 m one 16 * sqrt(2) per side.
+  const float sa = per.meshes[size_t(a)].uv1_scale_offset.x * float(per.width);
+  const float sb = per.meshes[size_t(b)].uv1_scale_offset.x * float(per.width);
+  EXPECT_NEAR(sa, 16.0f, 1e-3f);
+  EXPECT_NEAR(sb, 16.0f * std::sqrt(2.0f), 1e-3f);
+  const Rect &ra = per.regions[0].rect, &rb = per.regions[1].rect;
+  EXPECT_FALSE(ra.x < rb.x + rb.w && rb.x < ra.x + ra.w && ra.y < rb.y + rb.h &&
+               rb.y < ra.y + ra.h);
+
+  // One mesh folded onto itself in its own UVs: an error naming it.
+  s.meshes[size_t(b)].uv1 = {{0, 0}, {0, 1}, {1, 1}, {1, 1}};
+  s.meshes[size_t(b)].indices = {0, 1, 2, 0, 2, 1};
   try {
     build_layout(s, o);
     FAIL() << "overlapping TEXCOORD_1 accepted";
@@ -176,6 +214,45 @@ TEST(Layout, VerbatimTexcoord1IsUsedAndOverlapsAreRejectedByName) {
     EXPECT_NE(std::string(e.what()).find("'right'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("overlap"), std::string::npos) << e.what();
   }
+}
+
+TEST(Layout, LightmapScaleSetsANodesDensityAndExcludedMeshesGetNoTexels) {
+  Scene s = props_scene();
+  s.meshes[0].lightmap_scale = 0.5f;    // the 6 m floor at half density
+  s.meshes[1].lightmap_exclude = true;  // the crate: an occluder only
+  LayoutOptions o;
+  o.texels_per_unit = 16.0f;
+  const Layout l = build_layout(s, o);
+  ASSERT_EQ(l.regions.size(), s.meshes.size() - 1);
+  EXPECT_TRUE(l.meshes[1].indices.empty());
+  for (const Region& r : l.regions) EXPECT_NE(r.meshes[0], 1);
+  // The floor's chart: 6 m at 8 texels per metre, plus the borders.
+  const Rect& floor = l.regions[0].rect;
+  EXPECT_EQ(floor.w, 48 + 2 * o.border_texels);
+  EXPECT_EQ(floor.h, 48 + 2 * o.border_texels);
+
+  // The same node with TEXCOORD_1 of its own: its texels per metre follow the factor too.
+  s.meshes[0].uv1 = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+  s.meshes[0].lightmap_scale = 2.0f;
+  const Layout u = build_layout(s, o);
+  EXPECT_EQ(u.uv1_regions, 1);
+  EXPECT_NEAR(u.meshes[0].uv1_scale_offset.x * float(u.width), 6.0f * 16.0f * 2.0f, 1e-2f);
+
+  // --unwrap always ignores it; --unwrap never refuses the meshes without one, by name.
+  o.unwrap = UnwrapMode::kAlways;
+  const Layout a = build_layout(s, o);
+  EXPECT_EQ(a.uv1_regions, 0);
+  EXPECT_FALSE(a.meshes[0].from_uv1);
+  o.unwrap = UnwrapMode::kNever;
+  try {
+    build_layout(s, o);
+    FAIL() << "--unwrap never accepted meshes without TEXCOORD_1";
+  } catch (const CookError& e) {
+    EXPECT_NE(std::string(e.what()).find("'pillar'"), std::string::npos) << e.what();
+  }
+  for (MeshInstance& m : s.meshes) m.lightmap_exclude = true;
+  o.unwrap = UnwrapMode::kAuto;
+  EXPECT_THROW(build_layout(s, o), CookError);
 }
 
 struct Baked {

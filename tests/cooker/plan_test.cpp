@@ -66,7 +66,7 @@ const nlohmann::json* find_decision(const nlohmann::json& report, const std::str
   return nullptr;
 }
 
-// An open plane receives no bounce: its photons' virtual lights lie in its plane. The plan turns
+// An open plane receives no bounce: its light leaves the scene. The plan turns
 // the lamp's indirect light off, so it culls the pair of a box below the floor, out of the lamp's
 // reach; forced, the bounce is gathered (and is below half an output step everywhere) and the
 // pair traced and kept.

@@ -85,8 +85,8 @@ TEST(Tracer, EpsilonScalesWithTheScene) {
 }
 
 // Random segments through a room with a static pillar and two objects: the batch queries give
-// what the single-ray queries give, ray by ray, for any batch length (partial packets included),
-// and count each non-empty ray once.
+// what the single-ray queries give (occluded_many: what intersect with objects finds), ray by ray,
+// for any batch length (partial packets included), and count each non-empty ray once.
 TEST(Tracer, BatchQueriesMatchSingleRays) {
   Scene s;
   test::add_closed_room(s, {-2, 0, -2}, {2, 3, 2}, 0.1f, "room");
@@ -136,6 +136,14 @@ TEST(Tracer, BatchQueriesMatchSingleRays) {
       if (n == kRays) {
         EXPECT_GT(hit_count, kRays / 4);  // the comparison saw many hits
       }
+    }
+    std::vector<uint8_t> any(size_t(n) + 1, 7);
+    tr->occluded_many(rays.data(), n, any.data());
+    EXPECT_EQ(any[size_t(n)], 7);
+    for (int i = 0; i < n; ++i) {
+      const Ray& r = rays[size_t(i)];
+      ASSERT_EQ(any[size_t(i)], tr->intersect(r.origin, r.dir, r.tmin, r.tmax, true).hit ? 1 : 0)
+          << "ray " << i;
     }
     std::vector<uint8_t> blocked(size_t(n) + 1, 7);
     tr->occluded_static_many(rays.data(), n, blocked.data());

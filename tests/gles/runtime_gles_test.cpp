@@ -1,18 +1,27 @@
-// The GLES runtime on Mesa (llvmpipe) through an EGL surfaceless context: equality with the CPU
-// reference, budgets, whole changes, latency, fixed memory, drift and context loss.
+// The GLES runtime on Mesa (llvmpipe) through an EGL surfaceless context, on synthetic packs (no
+// cooker: these also run on the aarch64 build under qemu): equality with the CPU reference on
+// every path (float accumulator, half-float accumulator, CPU), the accuracy bars through the
+// incremental path, sunlight-bright packs, budgets, whole changes, latency, fixed memory, drift,
+// the rounding probe and context loss.
 #include "lightpatch/runtime.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "counters.h"
 #include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/half_float.h"
 #include "lightpatch/platform/egl_context.h"
 #include "lightpatch/platform/gl.h"
 #include "lightpatch/scene_state.h"
+#include "runtime/map_metrics.h"
 #include "runtime/map_reference.h"
 #include "runtime/synthetic_pack.h"
 
@@ -20,6 +29,7 @@ namespace lightpatch {
 namespace {
 
 using testing::make_synthetic_pack;
+using testing::presented;
 using testing::reference_map;
 using testing::RefState;
 using testing::SyntheticOptions;
@@ -27,20 +37,26 @@ using testing::SyntheticOptions;
 constexpr uint64_t kUnlimited = ~0ull >> 1;
 constexpr double kHalfUlp = 1.0 / 2048.0;
 
+RuntimeLimits limits_for(RecomposePath path) {
+  RuntimeLimits limits;
+  limits.force_cpu_fallback = path == RecomposePath::kCpu;
+  limits.force_half_accumulator = path == RecomposePath::kGpuHalf;
+  return limits;
+}
+
 class Gles : public ::testing::Test {
  protected:
   void SetUp() override {
     char message[256] = {};
     ASSERT_TRUE(context_.create_headless(message, sizeof message)) << message;
   }
-  void open(const SyntheticOptions& o, bool cpu = false) {
+  void open(const SyntheticOptions& o, RecomposePath path = RecomposePath::kGpuFloat) {
+    runtime_.close();
     bytes_ = make_synthetic_pack(o);
     Error error;
     ASSERT_TRUE(bytes_.open(&pack_, &error)) << error.message;
-    RuntimeLimits limits;
-    limits.force_cpu_fallback = cpu;
-    ASSERT_EQ(runtime_.open(pack_, limits, &error), Status::kOk) << error.message;
-    ASSERT_EQ(runtime_.gpu_path(), !cpu);
+    ASSERT_EQ(runtime_.open(pack_, limits_for(path), &error), Status::kOk) << error.message;
+    ASSERT_EQ(runtime_.path(), path) << path_name(runtime_.path());
   }
   int settle(uint64_t budget, int max_frames = 100000) {
     int frames = 0;
@@ -50,7 +66,7 @@ class Gles : public ::testing::Test {
     }
     return frames;
   }
-  // The sampled map as RGB (drops alpha).
+  // The sampled map as RGB irradiance (drops alpha).
   std::vector<float> read() {
     std::vector<float> rgba(size_t(runtime_.width()) * runtime_.height() * 4);
     Error error;
@@ -72,16 +88,21 @@ class Gles : public ::testing::Test {
       ASSERT_EQ(runtime_.set_light(l, s), Status::kOk);
     }
   }
-  // Max over texels of |got - want| / tolerance, tolerance = `ulps` half-float rounding of the
-  // texel's sum of absolute terms (+ a tiny absolute floor).
-  double error_in_ulps(const std::vector<float>& got, const std::vector<double>& want,
-                       const std::vector<double>& magnitude, double extra = 0.0) {
-    double worst = 0.0;
+  // Max over texels of |got - want| / (ulps half-float roundings of the texel's magnitude M, plus
+  // the runtime's relative drift bound of M, plus a tiny absolute floor): <= 1 passes.
+  static double worst(const std::vector<float>& got, const std::vector<double>& want,
+                      const std::vector<double>& magnitude, double ulps, double bound) {
+    double w = 0.0;
     for (size_t i = 0; i < got.size(); ++i) {
-      const double tol = kHalfUlp * magnitude[i] + extra + 1e-7;
-      worst = std::max(worst, std::fabs(double(got[i]) - want[i]) / tol);
+      const double tol = (ulps * kHalfUlp + bound) * magnitude[i] + 1e-6;
+      w = std::max(w, std::fabs(double(got[i]) - want[i]) / tol);
     }
-    return worst;
+    return w;
+  }
+  // The presented map of the wanted state and its magnitudes.
+  std::vector<double> wanted(std::vector<double>* magnitude) {
+    return presented(
+        reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), magnitude));
   }
 
   platform::EglContext context_;
@@ -90,7 +111,37 @@ class Gles : public ::testing::Test {
   Runtime runtime_;
 };
 
-TEST_F(Gles, RecomposeEqualsCpuReferenceForRandomStates) {
+// llvmpipe blends RGBA32F (EXT_color_buffer_float, EXT_float_blend): the default path. The probe
+// finds how each accumulator rounds: llvmpipe truncates half-float writes toward zero.
+TEST_F(Gles, PathsAndTheRoundingProbe) {
+  open(SyntheticOptions{});
+  EXPECT_LE(runtime_.precision().unit_roundoff, 1.0f / 8388608.0f);
+  const RuntimeMemory m = runtime_.memory();
+  EXPECT_EQ(m.light_map, uint64_t(runtime_.width()) * runtime_.height() * 8);
+  EXPECT_EQ(m.accumulator, uint64_t(runtime_.width()) * runtime_.height() * 16);
+  EXPECT_EQ(m.atlases, uint64_t(pack_.atlas_count()) * 64 * 64 * 4);
+  EXPECT_EQ(m.cpu_fallback, 0u);
+  open(SyntheticOptions{}, RecomposePath::kGpuHalf);
+  const TargetPrecision half = runtime_.precision();
+  EXPECT_TRUE(half.unit_roundoff == (half.truncates ? 1.0f / 1024.0f : 1.0f / 2048.0f));
+  const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  if (renderer && std::strstr(renderer, "llvmpipe")) {
+    EXPECT_TRUE(half.truncates);
+  }
+  EXPECT_EQ(runtime_.memory().accumulator, uint64_t(runtime_.width()) * runtime_.height() * 8);
+  open(SyntheticOptions{}, RecomposePath::kCpu);
+  EXPECT_EQ(runtime_.memory().accumulator, 0u);
+  EXPECT_EQ(runtime_.memory().atlases, 0u);
+  EXPECT_GT(runtime_.memory().cpu_fallback, 0u);
+}
+
+// Random states, every path, against the CPU reference recomposer: the float path and the CPU
+// path within one half-float rounding (the presented map) and the float sums; the half path
+// within the rounding of a rebuild's draws on its target (a full ulp each where it truncates) and
+// its drift bound.
+class GlesPaths : public Gles, public ::testing::WithParamInterface<RecomposePath> {};
+
+TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
   for (uint32_t seed = 1; seed <= 4; ++seed) {
     SyntheticOptions o;
     o.seed = seed;
@@ -101,7 +152,7 @@ TEST_F(Gles, RecomposeEqualsCpuReferenceForRandomStates) {
       o.max_patch = 6;
       o.patches_per_group = 12;
     }
-    open(o);
+    open(o, GetParam());
     if (seed == 4) {
       ASSERT_GT(pack_.atlas_count(), 8u);
     }
@@ -112,6 +163,10 @@ TEST_F(Gles, RecomposeEqualsCpuReferenceForRandomStates) {
     ASSERT_EQ(cpu.init(pack_, &error), Status::kOk);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const double ulps =
+        GetParam() == RecomposePath::kGpuHalf
+            ? double(pack_.group_count()) * 2048.0 * double(runtime_.precision().unit_roundoff)
+            : 1.0;
     for (int trial = 0; trial < 4; ++trial) {
       for (uint32_t l = 0; l < pack_.light_count(); ++l) {
         LightState s{u(rng) < 0.7f, {u(rng), u(rng), u(rng)}, 3.0f * u(rng)};
@@ -126,17 +181,118 @@ TEST_F(Gles, RecomposeEqualsCpuReferenceForRandomStates) {
       settle(kUnlimited);
       ASSERT_EQ(cpu.rebuild(state), Status::kOk);
       const std::vector<float> got = read();
-      RefState ref_state = testing::wanted_state(runtime_.planner(), pack_);
       std::vector<double> magnitude;
-      reference_map(pack_, ref_state, &magnitude);
-      std::vector<double> want(cpu.rgb(), cpu.rgb() + got.size());
-      // Incremental history since the last rebuild adds at most the runtime's error bound.
-      const double ulps = error_in_ulps(got, want, magnitude, runtime_.stats().error_bound);
-      EXPECT_LE(ulps, 8.0) << "seed " << seed << " trial " << trial;
+      wanted(&magnitude);
+      const std::vector<double> want(cpu.rgb(), cpu.rgb() + got.size());
+      EXPECT_LE(worst(got, want, magnitude, ulps, runtime_.stats().error_bound), 1.0)
+          << "seed " << seed << " trial " << trial;
     }
-    runtime_.close();
   }
 }
+
+// The accuracy bars (DESIGN.md's "exact"): >= 3 coloured lights, >= 3 objects, random toggles,
+// colours, intensities and lights off through the incremental path; after each single change and
+// after 300 states, relative RMSE <= 0.1 % and the median ratio within +-0.05 % of the CPU
+// reference (map_metrics.h), on the float and CPU paths. The half-float path on a truncating
+// driver cannot meet them (a rebuild alone loses a fraction of an ulp per draw): it is held to its
+// bound above instead.
+class GlesExactPaths : public Gles, public ::testing::WithParamInterface<RecomposePath> {};
+
+TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
+  SyntheticOptions o;
+  o.seed = 21;
+  o.lights = 4;
+  o.objects = 4;
+  open(o, GetParam());
+  Error error;
+  SceneState state;
+  ASSERT_EQ(state.init(pack_, &error), Status::kOk);
+  CpuRecomposer cpu;
+  ASSERT_EQ(cpu.init(pack_, &error), Status::kOk);
+  settle(kUnlimited);
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  testing::MapMetrics worst_single;
+  for (int step = 1; step <= 300; ++step) {
+    if (u(rng) < 0.3f) {
+      const uint32_t ob = rng() % pack_.object_count();
+      const bool v = !state.object_visible(ob);
+      ASSERT_EQ(state.set_object_visible(ob, v), Status::kOk);
+      ASSERT_EQ(runtime_.set_object_visible(ob, v), Status::kOk);
+    } else {
+      const uint32_t l = rng() % pack_.light_count();
+      LightState s = state.light(l);
+      const float pick = u(rng);
+      if (pick < 0.35f) {
+        for (float& c : s.color) c = 0.1f + 0.9f * u(rng);
+      } else if (pick < 0.7f) {
+        s.intensity = 0.2f + 4.0f * u(rng);
+      } else {
+        s.on = !s.on;
+      }
+      ASSERT_EQ(state.set_light(l, s), Status::kOk);
+      ASSERT_EQ(runtime_.set_light(l, s), Status::kOk);
+    }
+    settle(kUnlimited);
+    if (step > 20 && step < 300) continue;
+    ASSERT_EQ(cpu.rebuild(state), Status::kOk);
+    const std::vector<float> got = read();
+    const testing::MapMetrics m = testing::compare_maps(got.data(), cpu.rgb(), got.size());
+    EXPECT_LE(m.relative_rmse, 1e-3) << "state " << step;
+    EXPECT_LE(std::fabs(m.median_ratio - 1.0), 5e-4) << "state " << step;
+    EXPECT_GE(m.min_value, 0.0);
+    worst_single.relative_rmse = std::max(worst_single.relative_rmse, m.relative_rmse);
+    if (step == 300) {
+      std::printf("%s after 300 states: relative RMSE %.4f %%, median %.6f, 1st percentile %.5f\n",
+                  path_name(GetParam()), 100.0 * m.relative_rmse, m.median_ratio, m.p1_ratio);
+    }
+  }
+  std::printf("%s worst single change: relative RMSE %.4f %%\n", path_name(GetParam()),
+              100.0 * worst_single.relative_rmse);
+}
+
+// Sunlight: a pack whose lights are ~100,000 lux recomposes the same on every path (no clamp at
+// the half-float maximum, no negative texel); a state beyond what the map can represent is
+// refused with kOutOfRange, not clamped.
+TEST_P(GlesPaths, SunlightBrightPacksRecomposeWithoutClamping) {
+  SyntheticOptions o;
+  o.seed = 31;
+  o.intensity = 1.0e5f;
+  open(o, GetParam());
+  EXPECT_GT(runtime_.light_map_scale(), 1.0f);
+  settle(kUnlimited);
+  std::vector<double> magnitude;
+  const std::vector<double> want = wanted(&magnitude);
+  const std::vector<float> got = read();
+  const double ulps =
+      GetParam() == RecomposePath::kGpuHalf
+          ? double(pack_.group_count()) * 2048.0 * double(runtime_.precision().unit_roundoff)
+          : 1.0;
+  EXPECT_LE(worst(got, want, magnitude, ulps, 0.0), 1.0);
+  const double peak = *std::max_element(want.begin(), want.end());
+  EXPECT_GT(peak, 2.0 * kHalfMax);
+  EXPECT_GT(*std::max_element(got.begin(), got.end()), 0.99 * peak);
+  EXPECT_GE(*std::min_element(got.begin(), got.end()), 0.0f);
+  EXPECT_EQ(runtime_.set_light_intensity(0, 1.0e12f), Status::kOutOfRange);
+  EXPECT_TRUE(runtime_.idle());
+  // A bright but representable change goes through.
+  EXPECT_EQ(runtime_.set_light_intensity(0, 2.0f * runtime_.light(0).intensity), Status::kOk);
+  settle(kUnlimited);
+  EXPECT_LE(worst(read(), wanted(&magnitude), magnitude, ulps, runtime_.stats().error_bound), 1.0);
+}
+
+std::string path_param_name(const ::testing::TestParamInfo<RecomposePath>& p) {
+  return p.param == RecomposePath::kGpuFloat  ? "GpuFloat"
+         : p.param == RecomposePath::kGpuHalf ? "GpuHalf"
+                                              : "Cpu";
+}
+INSTANTIATE_TEST_SUITE_P(Paths, GlesPaths,
+                         ::testing::Values(RecomposePath::kGpuFloat, RecomposePath::kGpuHalf,
+                                           RecomposePath::kCpu),
+                         path_param_name);
+INSTANTIATE_TEST_SUITE_P(Paths, GlesExactPaths,
+                         ::testing::Values(RecomposePath::kGpuFloat, RecomposePath::kCpu),
+                         path_param_name);
 
 TEST_F(Gles, BudgetNeverExceededAndNoPartialStateSampled) {
   SyntheticOptions o;
@@ -159,9 +315,9 @@ TEST_F(Gles, BudgetNeverExceededAndNoPartialStateSampled) {
     if (!runtime_.ready()) continue;
     // What the game samples is exactly the presented state: never half a change or a rebuild.
     std::vector<double> magnitude;
-    const auto want =
-        reference_map(pack_, testing::shown_state(runtime_.planner(), pack_), &magnitude);
-    ASSERT_LE(error_in_ulps(read(), want, magnitude, s.error_bound), 8.0) << "frame " << frame;
+    const auto want = presented(
+        reference_map(pack_, testing::shown_state(runtime_.planner(), pack_), &magnitude));
+    ASSERT_LE(worst(read(), want, magnitude, 1.0, s.error_bound), 1.0) << "frame " << frame;
   }
   EXPECT_GT(presents, 1u);
 }
@@ -172,75 +328,77 @@ TEST_F(Gles, ChangesDuringARebuildAreNotLostAndLatencyIsBounded) {
   open(o);
   const uint64_t budget = 300;
   std::mt19937 rng(8);
-  uint32_t worst = 0;
+  uint32_t worst_latency = 0;
   for (int frame = 0; frame < 40; ++frame) {
     if (frame < 15) random_change(rng);
     ASSERT_EQ(runtime_.update(budget), Status::kOk);
-    worst = std::max(worst, runtime_.stats().max_latency_frames);
-    worst = std::max(worst, runtime_.stats().oldest_pending_frames);
+    worst_latency = std::max(worst_latency, runtime_.stats().max_latency_frames);
+    worst_latency = std::max(worst_latency, runtime_.stats().oldest_pending_frames);
   }
   settle(budget);
   const uint64_t rebuild = runtime_.planner().rebuild_texels();
-  EXPECT_LE(worst, uint32_t(2 * ((rebuild + budget - 1) / budget) + 3));
+  EXPECT_LE(worst_latency, uint32_t(2 * ((rebuild + budget - 1) / budget) + 3));
   std::vector<double> magnitude;
-  const auto want =
-      reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), &magnitude);
-  EXPECT_LE(error_in_ulps(read(), want, magnitude, runtime_.stats().error_bound), 8.0);
+  const auto want = wanted(&magnitude);
+  EXPECT_LE(worst(read(), want, magnitude, 1.0, runtime_.stats().error_bound), 1.0);
 }
 
 TEST_F(Gles, NoAllocationAndNoGlObjectCreationPerFrame) {
-  SyntheticOptions o;
-  o.seed = 13;
-  open(o);
-  settle(kUnlimited);
-  std::mt19937 rng(21);
-  // Pre-draw the random changes so the test's own bookkeeping allocates nothing while counting.
-  std::vector<uint32_t> picks(3000);
-  for (uint32_t& p : picks) p = rng();
-  // Warm the driver's state variants (shader variants, first use of each target).
-  for (int i = 0; i < 50; ++i) {
-    random_change(rng);
-    ASSERT_EQ(runtime_.update(500), Status::kOk);
-  }
-  testing::Counters& c = testing::counters();
-  // Positive control: opening a runtime is where memory and GL objects are made, and the
-  // counters see it.
-  {
+  for (RecomposePath path : {RecomposePath::kGpuFloat, RecomposePath::kCpu}) {
+    SyntheticOptions o;
+    o.seed = 13;
+    open(o, path);
+    settle(kUnlimited);
+    std::mt19937 rng(21);
+    // Pre-draw the random changes so the test's own bookkeeping allocates nothing while counting.
+    std::vector<uint32_t> picks(3000);
+    for (uint32_t& p : picks) p = rng();
+    // Warm the driver's state variants (shader variants, first use of each target).
+    for (int i = 0; i < 50; ++i) {
+      random_change(rng);
+      ASSERT_EQ(runtime_.update(500), Status::kOk);
+    }
+    testing::Counters& c = testing::counters();
+    // Positive control: opening a runtime is where memory and GL objects are made, and the
+    // counters see it.
+    {
+      c.news = c.mallocs = c.gl_creations = 0;
+      c.on = true;
+      Runtime other;
+      Error error;
+      ASSERT_EQ(other.open(pack_, limits_for(path), &error), Status::kOk);
+      c.on = false;
+      EXPECT_GE(c.gl_creations, path == RecomposePath::kCpu ? 1u : 5u);
+      if (testing::malloc_counted()) {
+        EXPECT_GT(c.mallocs, 0u);
+      }
+    }
     c.news = c.mallocs = c.gl_creations = 0;
     c.on = true;
-    Runtime other;
-    Error error;
-    ASSERT_EQ(other.open(pack_, RuntimeLimits(), &error), Status::kOk);
+    uint64_t frames_with_alloc = 0;
+    for (size_t i = 0; i + 2 < picks.size(); i += 3) {
+      const uint64_t before = c.news + c.mallocs;
+      if (pack_.object_count() && picks[i] % 5 < 2) {
+        const uint32_t ob = picks[i + 1] % pack_.object_count();
+        runtime_.set_object_visible(ob, !runtime_.object_visible(ob));
+      } else {
+        LightState s{picks[i + 1] % 4 != 0,
+                     {float(picks[i + 2] % 7) / 7.0f, 0.5f, 0.25f},
+                     float(picks[i + 1] % 5)};
+        runtime_.set_light(picks[i] % pack_.light_count(), s);
+      }
+      const uint64_t budgets[] = {100, 700, 3000};
+      runtime_.update(budgets[picks[i + 2] % 3]);
+      frames_with_alloc += (c.news + c.mallocs) != before;
+    }
     c.on = false;
-    EXPECT_GE(c.gl_creations, 5u);  // atlases, maps, framebuffers, buffers, VAO, shaders, program
+    EXPECT_EQ(c.gl_creations, 0u) << path_name(path);
+    EXPECT_EQ(c.news, 0u) << path_name(path);
     if (testing::malloc_counted()) {
-      EXPECT_GT(c.mallocs, 0u);
+      // malloc/calloc/realloc called from the runtime's code (not from inside the GL driver).
+      EXPECT_EQ(c.mallocs, 0u) << path_name(path) << ": " << frames_with_alloc
+                               << " frames allocated";
     }
-  }
-  c.news = c.mallocs = c.gl_creations = 0;
-  c.on = true;
-  uint64_t frames_with_alloc = 0;
-  for (size_t i = 0; i + 2 < picks.size(); i += 3) {
-    const uint64_t before = c.news + c.mallocs;
-    if (pack_.object_count() && picks[i] % 5 < 2) {
-      const uint32_t ob = picks[i + 1] % pack_.object_count();
-      runtime_.set_object_visible(ob, !runtime_.object_visible(ob));
-    } else {
-      LightState s{picks[i + 1] % 4 != 0,
-                   {float(picks[i + 2] % 7) / 7.0f, 0.5f, 0.25f},
-                   float(picks[i + 1] % 5)};
-      runtime_.set_light(picks[i] % pack_.light_count(), s);
-    }
-    const uint64_t budgets[] = {100, 700, 3000};
-    runtime_.update(budgets[picks[i + 2] % 3]);
-    frames_with_alloc += (c.news + c.mallocs) != before;
-  }
-  c.on = false;
-  EXPECT_EQ(c.gl_creations, 0u);
-  EXPECT_EQ(c.news, 0u);
-  if (testing::malloc_counted()) {
-    // malloc/calloc/realloc called from the runtime's code (not from inside the GL driver).
-    EXPECT_EQ(c.mallocs, 0u) << frames_with_alloc << " frames allocated";
   }
 }
 
@@ -261,17 +419,14 @@ TEST_F(Gles, NoDriftAfterTenThousandRandomChanges) {
   const std::vector<float> incremental = read();
   const double bound = runtime_.stats().error_bound;
   std::vector<double> magnitude;
-  const auto exact =
-      reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), &magnitude);
-  EXPECT_LE(error_in_ulps(incremental, exact, magnitude, bound), 8.0);
+  const auto exact = wanted(&magnitude);
+  EXPECT_LE(worst(incremental, exact, magnitude, 1.0, bound), 1.0);
   // And against a fresh rebuild on the GPU of the same state.
   runtime_.request_rebuild();
   settle(kUnlimited);
-  const std::vector<float> fresh = read();
-  for (size_t i = 0; i < fresh.size(); ++i) {
-    ASSERT_LE(std::fabs(double(fresh[i]) - incremental[i]),
-              bound + 16 * kHalfUlp * magnitude[i] + 1e-6);
-  }
+  EXPECT_LE(worst(read(), std::vector<double>(incremental.begin(), incremental.end()), magnitude,
+                  2.0, bound),
+            1.0);
 }
 
 TEST_F(Gles, SurvivesContextLoss) {
@@ -294,17 +449,17 @@ TEST_F(Gles, SurvivesContextLoss) {
   EXPECT_EQ(read(), before);
 }
 
-TEST_F(Gles, CpuFallbackMatchesTheGpuPath) {
+// The texture itself (not read_light_map) holds the presented map divided by the scale, as half
+// floats rounded to nearest, on the CPU path too.
+TEST_F(Gles, CpuPathUploadsTheRoundedPresentedMap) {
   SyntheticOptions o;
   o.seed = 16;
-  open(o, /*cpu=*/true);
+  open(o, RecomposePath::kCpu);
   std::mt19937 rng(4);
   for (int i = 0; i < 6; ++i) random_change(rng);
   settle(400);
   std::vector<double> magnitude;
-  const auto want =
-      reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), &magnitude);
-  // The CPU path accumulates in float and uploads to RGBA16F: one half rounding at most.
+  const auto want = wanted(&magnitude);
   std::vector<float> got(size_t(runtime_.width()) * runtime_.height() * 4);
   GLuint fbo = 0;
   glGenFramebuffers(1, &fbo);
@@ -316,32 +471,31 @@ TEST_F(Gles, CpuFallbackMatchesTheGpuPath) {
                got.data());
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   glDeleteFramebuffers(1, &fbo);
-  std::vector<float> rgb(got.size() / 4 * 3);
   for (size_t i = 0; i < got.size() / 4; ++i) {
-    for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = got[i * 4 + c];
+    for (int c = 0; c < 3; ++c) {
+      const float v = got[i * 4 + c] * runtime_.light_map_scale();
+      EXPECT_EQ(v, testing::round_half(float(want[i * 3 + c]))) << "texel " << i;
+    }
   }
-  EXPECT_LE(error_in_ulps(rgb, want, magnitude, runtime_.stats().error_bound), 2.0);
 }
 
 TEST_F(Gles, RowZeroIsTheTopRow) {
-  // One base patch in the top-left corner only: the first row read back must carry it.
+  // The map is asymmetric: a vertical flip would not match.
   SyntheticOptions o;
   o.seed = 17;
   open(o);
   settle(kUnlimited);
   const std::vector<float> got = read();
   std::vector<double> magnitude;
-  const auto want =
-      reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), &magnitude);
-  // The map is asymmetric: a vertical flip would not match.
-  EXPECT_LE(error_in_ulps(got, want, magnitude), 8.0);
+  const auto want = wanted(&magnitude);
+  EXPECT_LE(worst(got, want, magnitude, 1.0, 0.0), 1.0);
   std::vector<double> flipped(want.size());
   const uint32_t w = runtime_.width(), h = runtime_.height();
   for (uint32_t y = 0; y < h; ++y) {
     for (size_t i = 0; i < size_t(w) * 3; ++i)
       flipped[size_t(y) * w * 3 + i] = want[size_t(h - 1 - y) * w * 3 + i];
   }
-  EXPECT_GT(error_in_ulps(got, flipped, magnitude), 8.0);
+  EXPECT_GT(worst(got, flipped, magnitude, 8.0, 0.0), 1.0);
 }
 
 TEST_F(Gles, QueriesByNameAndRejectsBadValues) {
@@ -350,11 +504,13 @@ TEST_F(Gles, QueriesByNameAndRejectsBadValues) {
   EXPECT_EQ(runtime_.find_object("object_2"), 2);
   EXPECT_EQ(runtime_.find_light("nope"), -1);
   EXPECT_EQ(runtime_.set_light_intensity(0, -1.0f), Status::kInvalidArgument);
+  EXPECT_EQ(runtime_.set_light_intensity(0, NAN), Status::kInvalidArgument);
+  EXPECT_EQ(runtime_.light_map_scale(), 1.0f);
+#ifdef NDEBUG
   EXPECT_EQ(runtime_.set_light_on(99, true), Status::kInvalidArgument);
-  const RuntimeMemory m = runtime_.memory();
-  EXPECT_EQ(m.light_map, uint64_t(runtime_.width()) * runtime_.height() * 8);
-  EXPECT_EQ(m.intermediate, m.light_map);
-  EXPECT_EQ(m.atlases, uint64_t(pack_.atlas_count()) * 64 * 64 * 4);
+#else
+  EXPECT_DEATH(runtime_.set_light_on(99, true), "out of range");
+#endif
 }
 
 }  // namespace

@@ -46,7 +46,7 @@ TEST(InnCli, GenerateHelpDocumentsEveryOption) {
 TEST(InnCli, PlayHelpDocumentsEveryOption) {
   expect_documents("play",
                    {"--window", "--headless", "--script", "--out", "--scene", "--pack", "--size",
-                    "--budget", "--exposure", "--drift-ulps", "--cpu", "-h, --help"});
+                    "--budget", "--exposure", "--drift-ulps", "--frames", "--cpu", "-h, --help"});
 }
 
 TEST(InnCli, UsageErrorsExitTwoAndPrintNothingOnStdout) {

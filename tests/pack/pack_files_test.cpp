@@ -1,7 +1,8 @@
-// The committed test packs stay true to the cooker; golden bytes of format version 1; hostile
+// The committed test packs stay true to the cooker; golden bytes of format version 2; hostile
 // packs (truncated, bytes flipped) are refused cleanly or stay safe to use (run under ASan).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -17,9 +18,9 @@
 namespace lightpatch {
 namespace {
 
-// Golden values of tiny.lpk (format version 1).
+// Golden values of tiny.lpk (format version 2).
 constexpr uint64_t kTinySize = 2816;
-constexpr uint32_t kTinyCrc = 0xe71dee31u;
+constexpr uint32_t kTinyCrc = 0xb20bb73bu;
 
 std::string data_path(const std::string& name) {
   return std::string(LIGHTPATCH_TEST_DATA_DIR) + "/packs/" + name;
@@ -48,13 +49,13 @@ TEST(PackFiles, CommittedPacksMatchTheCooker) {
   check_committed("tiny.lpk", test::build_tiny_pack());
 }
 
-TEST(PackFiles, GoldenBytesOfVersion1) {
+TEST(PackFiles, GoldenBytesOfVersion2) {
   const std::vector<uint8_t> b = test::build_tiny_pack();
   ASSERT_GE(b.size(), 64u);
   EXPECT_EQ(std::memcmp(b.data(), "LPK1", 4), 0);
   uint32_t version;
   std::memcpy(&version, b.data() + 4, 4);
-  EXPECT_EQ(version, 1u);
+  EXPECT_EQ(version, 2u);
   uint64_t file_size;
   std::memcpy(&file_size, b.data() + 8, 8);
   EXPECT_EQ(file_size, b.size());
@@ -64,6 +65,8 @@ TEST(PackFiles, GoldenBytesOfVersion1) {
   EXPECT_EQ(offsetof(pack::Header, table_checksum), 20u);
   EXPECT_EQ(offsetof(pack::LightRecord, intensity), 20u);
   EXPECT_EQ(offsetof(pack::MeshRecord, object), 40u);
+  EXPECT_EQ(offsetof(pack::MeshRecord, lightmap_scale_offset), 48u);
+  EXPECT_EQ(sizeof(pack::MeshRecord), 64u);
   // The whole file: any change to the writer, the quantizer or the packer shows here.
   EXPECT_EQ(b.size(), kTinySize);
   EXPECT_EQ(crc32(b.data(), b.size()), kTinyCrc);
@@ -167,6 +170,47 @@ TEST(PackFiles, FlippedBytesAreRefusedOrSafe) {
   EXPECT_GT(refused_raw, 0);
   EXPECT_GT(refused_fixed, 0);
   EXPECT_GT(accepted, 0);  // e.g. a colour or scale changed to another valid value
+}
+
+// Mesh records of version 2: an instance laid out by its own TEXCOORD_1 carries its scale and
+// offset; unknown flags, a scale without the flag and a non-finite one are refused.
+TEST(PackFiles, MeshScaleAndOffsetAreCheckedOnLoad) {
+  const std::vector<uint8_t> b = test::build_small_pack();
+  Aligned base(b, b.size());
+  PackView v;
+  ASSERT_EQ(PackView::open(base.data(), b.size(), &v, nullptr), Status::kOk);
+  ASSERT_EQ(v.mesh_count(), 4u);
+  const pack::MeshRecord& m = v.mesh(1);
+  ASSERT_EQ(m.flags, pack::kMeshFlagTexcoord1);
+  // The unit square's corners through the scale and offset give the vertices' UVs.
+  const pack::MeshVertex* mv = v.mesh_vertices(1);
+  const float* so = m.lightmap_scale_offset;
+  const float corner[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_FLOAT_EQ(corner[k][0] * so[0] + so[2], mv[k].u);
+    EXPECT_FLOAT_EQ(corner[k][1] * so[1] + so[3], mv[k].v);
+  }
+  EXPECT_EQ(v.mesh(0).flags, 0u);
+
+  const uint64_t records = uint64_t(reinterpret_cast<const uint8_t*>(&v.mesh(0)) - base.data());
+  auto refused = [&](uint32_t mesh, size_t field, const void* value, size_t n) {
+    Aligned a(b, b.size());
+    std::memcpy(a.data() + records + mesh * sizeof(pack::MeshRecord) + field, value, n);
+    fix_checksum(a.data(), b.size());
+    PackView w;
+    Error e;
+    const bool ok = PackView::open(a.data(), b.size(), &w, &e) == Status::kOk;
+    if (!ok) {
+      EXPECT_NE(std::string(e.message).find("mesh"), std::string::npos) << e.message;
+    }
+    return !ok;
+  };
+  const uint16_t unknown = 2;
+  const float nan = std::nanf(""), one = 1.0f;
+  EXPECT_TRUE(refused(1, offsetof(pack::MeshRecord, flags), &unknown, 2));
+  EXPECT_TRUE(refused(0, offsetof(pack::MeshRecord, lightmap_scale_offset), &one, 4));
+  EXPECT_TRUE(refused(1, offsetof(pack::MeshRecord, lightmap_scale_offset) + 8, &nan, 4));
+  EXPECT_FALSE(refused(1, offsetof(pack::MeshRecord, lightmap_scale_offset) + 8, &one, 4));
 }
 
 }  // namespace

@@ -57,6 +57,11 @@ Synthetic make_synthetic(const SyntheticOptions& o) {
       const float u1 = float(rects[r].x + rects[r].w) / w, v1 = float(rects[r].y + rects[r].h) / h;
       ml.uv = {{u0, v0}, {u1, v0}, {u0, v1}, {u1, v1}};
       ml.indices = mi.indices;
+      if (r % 2 == 1) {  // placed by its own TEXCOORD_1 (the unit square), scale and offset
+        s.scene.meshes.back().uv1 = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+        ml.from_uv1 = true;
+        ml.uv1_scale_offset = glm::vec4(u1 - u0, v1 - v0, u0, v0);
+      }
       s.layout.meshes.push_back(ml);
     }
   }

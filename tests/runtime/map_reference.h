@@ -1,6 +1,8 @@
-// Test helpers shared by the planner (CPU) and GLES tests: a double-precision evaluation of the
-// recomposition formula straight from the pack, and a DrawSink that executes a plan on the CPU
-// (optionally rounding to half floats after every draw, like an RGBA16F target).
+// Test helpers shared by the planner (CPU) and GLES tests: the recomposition formula evaluated
+// from scratch in double precision (every active group added once, with the rules of
+// group_rules.h and the drawing loop of patch_accumulate.h), per-texel magnitudes for rounding
+// tolerances, and a DrawSink that executes a plan on the CPU, rounding every texel a draw writes
+// like a half-float target (to nearest or toward zero) when asked to.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -8,45 +10,24 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
+#include "lightpatch/group_rules.h"
+#include "lightpatch/half_float.h"
 #include "lightpatch/pack_view.h"
-#include "lightpatch/patch_decode.h"
+#include "lightpatch/patch_accumulate.h"
 #include "lightpatch/planner.h"
 
 namespace lightpatch::testing {
 
-// Rounds to the nearest IEEE half float (normal range; tiny values flush like subnormals).
-inline float round_half(float v) {
-  if (v == 0.0f || !std::isfinite(v)) return v;
-  int e = 0;
-  const double m = std::frexp(double(v), &e);  // v = m * 2^e, 0.5 <= |m| < 1
-  const int bits = e < -13 ? 11 - (-13 - e) : 11;
-  if (bits <= 0) return 0.0f;
-  return float(std::ldexp(std::nearbyint(std::ldexp(m, bits)), e - bits));
-}
-
-// Adds factor * decoded patch values of patches [first, first+count) to an RGB map.
-template <typename T>
-void add_patches(const PackView& pack, uint32_t first, uint32_t count, const double factor[3],
-                 T* map) {
-  const uint32_t w = pack.lightmap_width();
-  for (uint32_t p = first; p < first + count; ++p) {
-    const pack::PatchRecord& pr = pack.patch(p);
-    const double sign = pack::group_subtracts(pack.group(pr.group).kind) ? -1.0 : 1.0;
-    const uint8_t* atlas = pack.atlas_pixels(pr.atlas);
-    const uint32_t aw = pack.atlas(pr.atlas).width;
-    for (uint32_t y = 0; y < pr.height; ++y) {
-      for (uint32_t x = 0; x < pr.width; ++x) {
-        const uint8_t* q = atlas + (size_t(pr.atlas_y + y) * aw + pr.atlas_x + x) * 4;
-        T* out = map + (size_t(pr.dest_y + y) * w + pr.dest_x + x) * 3;
-        for (uint32_t c = 0; c < 3; ++c) {
-          const uint8_t byte = q[pr.channel + (pr.channel_count == 3 ? c : 0)];
-          out[c] += T(sign * double(patch_decode(pr, byte)) * factor[c]);
-        }
-      }
-    }
-  }
+// Rounds to a half float: to nearest even, or toward zero (Mesa's llvmpipe).
+inline float round_half(float v, bool toward_zero = false) {
+  const float nearest = half_to_float(float_to_half(v));
+  if (!toward_zero || std::fabs(nearest) <= std::fabs(v)) return nearest;
+  // The nearest was away from zero: step one half ulp back toward zero.
+  uint16_t h = float_to_half(v);
+  return half_to_float(uint16_t(h - 1));
 }
 
 struct RefState {
@@ -54,8 +35,9 @@ struct RefState {
   std::vector<uint8_t> visible;
 };
 
-// L = sum over active groups of factor * group, in double. `magnitude` (optional) receives, per
-// texel, the sum of absolute terms (for rounding tolerances).
+// L = sum over the groups the state draws of factor * group, in double. `magnitude` (optional)
+// receives, per texel and channel, the planner's magnitude M = |B| + sum_l |f_l| A_l (planner.h:
+// every group of every light, drawn or not), an upper bound of the sum of |terms|.
 inline std::vector<double> reference_map(const PackView& pack, const RefState& s,
                                          std::vector<double>* magnitude = nullptr) {
   const size_t n = size_t(pack.lightmap_width()) * pack.lightmap_height() * 3;
@@ -64,49 +46,56 @@ inline std::vector<double> reference_map(const PackView& pack, const RefState& s
   for (uint32_t g = 0; g < pack.group_count(); ++g) {
     const pack::GroupRecord& gr = pack.group(g);
     double f[3] = {1, 1, 1};
-    if (gr.kind == pack::kGroupStaticShadow && !s.visible[gr.object_a]) continue;
-    if (gr.kind != pack::kGroupBase && gr.kind != pack::kGroupStaticShadow) {
+    if (group_has_light(gr.kind)) {
       for (int c = 0; c < 3; ++c) f[c] = s.factor[gr.light * 3 + c];
-      if (gr.kind != pack::kGroupContribution && !s.visible[gr.object_a]) continue;
-      if (gr.kind == pack::kGroupPairCorrection && !s.visible[gr.object_b]) continue;
     }
-    add_patches(pack, gr.first_patch, gr.patch_count, f, map.data());
-    if (magnitude) {
-      std::vector<double> one(n, 0.0);
-      add_patches(pack, gr.first_patch, gr.patch_count, f, one.data());
-      for (size_t i = 0; i < n; ++i) (*magnitude)[i] += std::fabs(one[i]);
-    }
+    if (magnitude) add_patches(pack, gr.first_patch, gr.patch_count, f, magnitude->data(), true);
+    const bool active = group_active(
+        gr, [&](uint32_t) { return f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0; },
+        [&](uint32_t o) { return s.visible[o] != 0; });
+    if (active) add_patches(pack, gr.first_patch, gr.patch_count, f, map.data());
   }
   return map;
 }
 
-// Executes a plan on two RGB float maps; records costs and draws.
+// What the game samples: the map clamped at zero.
+inline std::vector<double> presented(std::vector<double> map) {
+  for (double& v : map) v = std::max(v, 0.0);
+  return map;
+}
+
+enum class Rounding { kNone, kHalfNearest, kHalfTowardZero };
+
+// Executes a plan on an RGB float accumulator and an RGB presented map; records costs and steps.
 class CpuMapSink final : public DrawSink {
  public:
-  CpuMapSink(const PackView& pack, bool half) : pack_(pack), half_(half) {
+  CpuMapSink(const PackView& pack, Rounding rounding) : pack_(pack), rounding_(rounding) {
     const size_t n = size_t(pack.lightmap_width()) * pack.lightmap_height() * 3;
-    maps_[0].assign(n, 0.0f);
-    maps_[1].assign(n, 0.0f);
+    accumulator_.assign(n, 0.0f);
+    presented_.assign(n, 0.0f);
   }
-  void clear_intermediate() override {
-    std::fill(maps_[shown_ ^ 1].begin(), maps_[shown_ ^ 1].end(), 0.0f);
+  void clear() override {
+    std::fill(accumulator_.begin(), accumulator_.end(), 0.0f);
     texels += uint64_t(pack_.lightmap_width()) * pack_.lightmap_height();
   }
-  void draw(DrawTarget target, uint32_t group, uint32_t first, uint32_t count,
-            const float factor[3]) override {
+  void draw(uint32_t group, uint32_t first, uint32_t count, const float factor[3]) override {
     EXPECT_GE(first, pack_.group(group).first_patch);
     EXPECT_LE(first + count, pack_.group(group).first_patch + pack_.group(group).patch_count);
-    std::vector<float>& m = maps_[target == DrawTarget::kLightMap ? shown_ : shown_ ^ 1];
-    const double f[3] = {factor[0], factor[1], factor[2]};
-    add_patches(pack_, first, count, f, m.data());
-    if (half_) {  // an RGBA16F target rounds every texel a draw writes
+    if (rounding_ == Rounding::kNone) {
+      add_patches(pack_, first, count, factor, accumulator_.data());
+    } else {  // a half-float target rounds every texel a draw writes
       const uint32_t w = pack_.lightmap_width();
       for (uint32_t p = first; p < first + count; ++p) {
         const pack::PatchRecord& pr = pack_.patch(p);
+        scratch_.assign(accumulator_.size(), 0.0f);
+        add_patches(pack_, p, 1, factor, scratch_.data());
         for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
           for (uint32_t x = pr.dest_x; x < uint32_t(pr.dest_x + pr.width); ++x) {
-            for (int c = 0; c < 3; ++c)
-              m[(size_t(y) * w + x) * 3 + c] = round_half(m[(size_t(y) * w + x) * 3 + c]);
+            for (int c = 0; c < 3; ++c) {
+              float& v = accumulator_[(size_t(y) * w + x) * 3 + c];
+              v = round_half(v + scratch_[(size_t(y) * w + x) * 3 + c],
+                             rounding_ == Rounding::kHalfTowardZero);
+            }
           }
         }
       }
@@ -115,22 +104,39 @@ class CpuMapSink final : public DrawSink {
       texels += uint64_t(pack_.patch(p).width) * pack_.patch(p).height;
     }
     ++draws;
-    if (target == DrawTarget::kLightMap) ++light_map_draws;
   }
-  void present() override {
-    shown_ ^= 1;
+  void present(uint32_t first, uint32_t count) override {
+    const uint32_t w = pack_.lightmap_width();
+    for (uint32_t p = first; p < first + count; ++p) {
+      const pack::PatchRecord& pr = pack_.patch(p);
+      for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
+        for (uint32_t x = pr.dest_x; x < uint32_t(pr.dest_x + pr.width); ++x) {
+          for (int c = 0; c < 3; ++c) {
+            const size_t i = (size_t(y) * w + x) * 3 + c;
+            presented_[i] = std::max(accumulator_[i], 0.0f);
+          }
+        }
+      }
+      texels += uint64_t(pr.width) * pr.height;
+    }
     ++presents;
   }
-  const std::vector<float>& sampled() const { return maps_[shown_]; }
+  void present_all() override {
+    for (size_t i = 0; i < accumulator_.size(); ++i)
+      presented_[i] = std::max(accumulator_[i], 0.0f);
+    texels += uint64_t(pack_.lightmap_width()) * pack_.lightmap_height();
+    ++presents;
+    ++whole_presents;
+  }
+  const std::vector<float>& sampled() const { return presented_; }
 
   uint64_t texels = 0;
-  uint32_t draws = 0, light_map_draws = 0, presents = 0;
+  uint32_t draws = 0, presents = 0, whole_presents = 0;
 
  private:
   const PackView& pack_;
-  bool half_;
-  std::vector<float> maps_[2];
-  int shown_ = 0;
+  Rounding rounding_;
+  std::vector<float> accumulator_, presented_, scratch_;
 };
 
 // The planner's wanted / presented state as a RefState.

@@ -1,5 +1,6 @@
 // The recomposition planner without GL: budgets, atomic changes, latency, changes during a
-// rebuild, and drift under half-float rounding (CpuMapSink rounds like an RGBA16F target).
+// rebuild, the clamp at zero of what is presented, the value limit, and drift under half-float
+// rounding to nearest and toward zero (CpuMapSink rounds like an RGBA16F target).
 #include "lightpatch/planner.h"
 
 #include <gtest/gtest.h>
@@ -15,8 +16,12 @@ namespace {
 
 using testing::CpuMapSink;
 using testing::make_synthetic_pack;
+using testing::presented;
 using testing::reference_map;
+using testing::Rounding;
 using testing::SyntheticOptions;
+
+constexpr uint64_t kUnlimited = ~0ull >> 1;
 
 double max_abs_diff(const std::vector<float>& a, const std::vector<double>& b) {
   double m = 0;
@@ -25,11 +30,18 @@ double max_abs_diff(const std::vector<float>& a, const std::vector<double>& b) {
 }
 
 struct Fixture {
-  explicit Fixture(const SyntheticOptions& o, bool half = false) : bytes(make_synthetic_pack(o)) {
+  explicit Fixture(const SyntheticOptions& o, Rounding rounding = Rounding::kNone)
+      : bytes(make_synthetic_pack(o)) {
     Error error;
     EXPECT_TRUE(bytes.open(&pack, &error)) << error.message;
     EXPECT_EQ(planner.init(pack, PlannerLimits(), &error), Status::kOk) << error.message;
-    sink = std::make_unique<CpuMapSink>(pack, half);
+    // What the sink does: float rounding to nearest, or a half float (a full ulp per write where
+    // it truncates).
+    TargetPrecision precision;
+    if (rounding == Rounding::kHalfNearest) precision = TargetPrecision{1.0f / 2048.0f, false};
+    if (rounding == Rounding::kHalfTowardZero) precision = TargetPrecision{1.0f / 1024.0f, true};
+    planner.set_precision(precision);
+    sink = std::make_unique<CpuMapSink>(pack, rounding);
   }
   // Runs frames until idle; returns the frame count.
   int settle(uint64_t budget, int max_frames = 10000) {
@@ -61,14 +73,15 @@ TEST(Planner, FirstBuildMatchesTheFormulaAndCostsWhatItSaid) {
   Fixture f(SyntheticOptions{});
   const uint64_t predicted = f.planner.rebuild_texels();
   EXPECT_FALSE(f.planner.map_ready());
-  f.planner.update(~0ull >> 1, *f.sink);
+  f.planner.update(kUnlimited, *f.sink);
   EXPECT_TRUE(f.planner.map_ready());
   EXPECT_TRUE(f.planner.idle());
   EXPECT_EQ(f.sink->texels, predicted);
   EXPECT_EQ(f.planner.stats().texels, predicted);
   EXPECT_EQ(f.sink->presents, 1u);
-  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
+  EXPECT_EQ(f.sink->whole_presents, 1u);
 }
 
 TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
@@ -93,7 +106,7 @@ TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
       }
       if (f.planner.map_ready()) {
         // The sampled map is exactly the presented state: never half of a change.
-        const auto ref = reference_map(f.pack, testing::shown_state(f.planner, f.pack));
+        const auto ref = presented(reference_map(f.pack, testing::shown_state(f.planner, f.pack)));
         ASSERT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3)
             << "seed " << seed << " frame " << frame;
       }
@@ -103,23 +116,24 @@ TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
 
 TEST(Planner, SmallChangeIsIncrementalAndLandsInOneFrame) {
   Fixture f(SyntheticOptions{});
-  f.settle(~0ull >> 1);
-  const uint32_t presents = f.sink->presents;
+  f.settle(kUnlimited);
+  const uint32_t presents = f.sink->whole_presents;
   const float c[3] = {0.3f, 0.6f, 0.9f};
   ASSERT_EQ(f.planner.set_light(1, true, c, 2.0f), Status::kOk);
   const uint64_t cost = f.planner.light_change_texels(1);
   ASSERT_LT(cost, f.planner.rebuild_texels());
   f.planner.update(cost, *f.sink);  // exactly the change's cost fits
   EXPECT_TRUE(f.planner.idle());
-  EXPECT_EQ(f.sink->presents, presents);  // no rebuild
+  EXPECT_EQ(f.sink->whole_presents, presents);  // no rebuild
   EXPECT_EQ(f.planner.stats().texels, cost);
   EXPECT_EQ(f.planner.stats().completed_changes, 1u);
   EXPECT_EQ(f.planner.stats().max_latency_frames, 1u);
-  // One draw per group of the light (contribution + its visible shadow/pair groups).
+  // One draw and one present per group of the light (contribution + its visible shadow/pair
+  // groups; every object is visible).
   uint32_t groups = 0;
   for (uint32_t g = 0; g < f.pack.group_count(); ++g) groups += f.pack.group(g).light == 1;
-  EXPECT_EQ(f.planner.stats().draws, groups);  // every object is visible
-  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  EXPECT_EQ(f.planner.stats().draws, 2 * groups);
+  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
 
   // A light change and an object toggle in one frame whose budget is one texel short of both:
@@ -138,8 +152,8 @@ TEST(Planner, SmallChangeIsIncrementalAndLandsInOneFrame) {
   EXPECT_TRUE(f.planner.idle());
   EXPECT_EQ(f.planner.stats().texels, toggle);
   EXPECT_EQ(f.planner.stats().max_latency_frames, 2u);
-  EXPECT_EQ(f.sink->presents, presents);
-  const auto ref2 = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  EXPECT_EQ(f.sink->whole_presents, presents);
+  const auto ref2 = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref2), 1e-4);
 }
 
@@ -159,7 +173,7 @@ TEST(Planner, ChangesDuringARebuildAreNotLostAndLatencyIsBounded) {
     }
     f.settle(budget);
     ASSERT_TRUE(f.planner.idle());
-    const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+    const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
     EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3);
     // Bound: a change waits for at most the running rebuild and one more of its own.
     const uint64_t rebuild = f.planner.rebuild_texels();
@@ -176,35 +190,129 @@ TEST(Planner, OversizeStepsRunAloneAndStillFinish) {
   int frames = f.settle(budget);
   EXPECT_TRUE(f.planner.idle());
   EXPECT_GT(frames, 1);
-  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
 }
 
-TEST(Planner, NoDriftAfterTenThousandChangesOnAHalfFloatTarget) {
+// Over 10,000 random changes on a half-float target (rounding to nearest, then truncating), the
+// sampled map stays within the planner's relative bound plus one rebuild's rounding of each
+// texel's magnitude; the bound forced rebuilds on the way.
+void no_drift_on_a_half_float_target(Rounding rounding) {
   SyntheticOptions o;
   o.seed = 7;
   o.width = 24;
   o.height = 20;
   o.max_patch = 6;
-  Fixture f(o, /*half=*/true);
-  f.settle(~0ull >> 1);
+  Fixture f(o, rounding);
+  f.settle(kUnlimited);
   std::mt19937 rng(99);
-  const uint32_t rebuilds_before = f.sink->presents;
+  const uint32_t rebuilds_before = f.sink->whole_presents;
   for (int i = 0; i < 10000; ++i) {
     f.random_change(rng);
-    f.planner.update(~0ull >> 1, *f.sink);
+    f.planner.update(kUnlimited, *f.sink);
     ASSERT_TRUE(f.planner.idle());
+    ASSERT_LE(f.planner.stats().error_bound, PlannerLimits().drift_tolerance);
   }
-  EXPECT_GT(f.sink->presents, rebuilds_before);  // the drift bound forced rebuilds
-  // Against the exact map: the incremental error bound plus one rebuild's rounding.
+  EXPECT_GT(f.sink->whole_presents, rebuilds_before + 100);  // the drift bound forced rebuilds
   std::vector<double> magnitude;
-  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack), &magnitude);
+  const auto ref =
+      presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack), &magnitude));
+  const double u = rounding == Rounding::kHalfNearest ? 1.0 / 2048.0 : 1.0 / 1024.0;
   const double bound = f.planner.stats().error_bound;
   const auto& got = f.sink->sampled();
   for (size_t i = 0; i < got.size(); ++i) {
-    const double rebuild_rounding = double(f.pack.group_count()) * magnitude[i] / 2048.0;
-    ASSERT_LE(std::fabs(got[i] - ref[i]), bound + rebuild_rounding + 1e-6) << "texel " << i / 3;
+    const double rebuild_rounding = double(f.pack.group_count()) * u;
+    ASSERT_LE(std::fabs(got[i] - ref[i]), (bound + rebuild_rounding) * magnitude[i] + 1e-6)
+        << "texel " << i / 3;
   }
+}
+
+TEST(Planner, NoDriftAfterTenThousandChangesOnAHalfFloatTargetRoundingToNearest) {
+  no_drift_on_a_half_float_target(Rounding::kHalfNearest);
+}
+
+TEST(Planner, NoDriftAfterTenThousandChangesOnAHalfFloatTargetThatTruncates) {
+  no_drift_on_a_half_float_target(Rounding::kHalfTowardZero);
+}
+
+// The drift bound is relative to each texel: turning the brightest light off subtracts terms far
+// larger than what remains. On a float target the change stays incremental; on a truncating
+// half-float target (a full ulp lost per write, biased) the planner rebuilds instead.
+TEST(Planner, TurningALightOffRebuildsOnATruncatingTargetOnly) {
+  SyntheticOptions o;
+  o.seed = 3;
+  for (Rounding r : {Rounding::kNone, Rounding::kHalfTowardZero}) {
+    Fixture f(o, r);
+    f.settle(kUnlimited);
+    const uint32_t before = f.sink->whole_presents;
+    const float white[3] = {1.0f, 1.0f, 1.0f};
+    ASSERT_EQ(f.planner.set_light(0, false, white, 1.0f), Status::kOk);
+    f.planner.update(kUnlimited, *f.sink);
+    EXPECT_TRUE(f.planner.idle());
+    EXPECT_EQ(f.sink->whole_presents - before, r == Rounding::kNone ? 0u : 1u);
+    const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+    EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), r == Rounding::kNone ? 1e-4 : 0.05);
+  }
+}
+
+// On a float target the bound grows with the draws and with the ratio by which a light dims.
+TEST(Planner, DriftBoundCountsDrawsAndDimming) {
+  Fixture f(SyntheticOptions{});
+  f.settle(kUnlimited);
+  EXPECT_EQ(f.planner.stats().error_bound, 0.0f);
+  const float white[3] = {1.0f, 1.0f, 1.0f};
+  ASSERT_EQ(f.planner.set_light(1, true, white, 4.0f), Status::kOk);
+  f.planner.update(kUnlimited, *f.sink);
+  const float after_one = f.planner.stats().error_bound;
+  EXPECT_GT(after_one, 0.0f);
+  ASSERT_EQ(f.planner.set_light(1, true, white, 0.04f), Status::kOk);  // dimmed 100x
+  f.planner.update(kUnlimited, *f.sink);
+  EXPECT_GT(f.planner.stats().error_bound, 50.0f * after_one);
+  ASSERT_EQ(f.planner.set_light(1, true, white, 4.0f), Status::kOk);  // and back
+  f.planner.update(kUnlimited, *f.sink);
+  EXPECT_LT(f.planner.stats().error_bound, 5.0f * after_one);
+}
+
+// What the game samples is clamped at zero; the accumulator keeps the signed sum, so a later
+// change that adds light back is exact.
+TEST(Planner, PresentedMapIsClampedAtZero) {
+  SyntheticOptions o;
+  o.seed = 9;
+  Fixture f(o);
+  // Every light bright, every object visible: shadows subtract more than some texels hold.
+  const float white[3] = {1.0f, 1.0f, 1.0f};
+  for (uint32_t l = 0; l < f.pack.light_count(); ++l)
+    ASSERT_EQ(f.planner.set_light(l, true, white, 4.0f), Status::kOk);
+  f.settle(kUnlimited);
+  const auto raw = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  ASSERT_LT(*std::min_element(raw.begin(), raw.end()), -1e-3);  // the case exists
+  const auto& got = f.sink->sampled();
+  EXPECT_GE(*std::min_element(got.begin(), got.end()), 0.0f);
+  EXPECT_LT(max_abs_diff(got, presented(raw)), 1e-4);
+  ASSERT_EQ(f.planner.set_object_visible(0, false), Status::kOk);
+  f.planner.update(kUnlimited, *f.sink);
+  EXPECT_LT(max_abs_diff(f.sink->sampled(), presented(reference_map(
+                                                f.pack, testing::wanted_state(f.planner, f.pack)))),
+            1e-4);
+}
+
+// A state whose map could exceed the value limit is refused whole; the bound is what it says.
+TEST(Planner, RefusesStatesBeyondTheValueLimit) {
+  Fixture f(SyntheticOptions{});
+  f.settle(kUnlimited);
+  const float bound = f.planner.wanted_map_bound();
+  const auto ref = reference_map(f.pack, testing::wanted_state(f.planner, f.pack));
+  double peak = 0.0;
+  for (double v : ref) peak = std::max(peak, std::fabs(v));
+  EXPECT_GE(double(bound), peak);
+  f.planner.set_value_limit(2.0f * bound);
+  const float intensity = f.planner.light_intensity(0);
+  const float white[3] = {1.0f, 1.0f, 1.0f};
+  EXPECT_EQ(f.planner.set_light(0, true, white, 1.0e6f), Status::kOutOfRange);
+  EXPECT_EQ(f.planner.light_intensity(0), intensity);
+  EXPECT_TRUE(f.planner.idle());
+  const float big[3] = {3.0e38f, 3.0e38f, 3.0e38f};
+  EXPECT_EQ(f.planner.set_light(0, true, big, 10.0f), Status::kOutOfRange);  // overflows
 }
 
 TEST(Planner, RejectsBadValues) {
@@ -213,8 +321,20 @@ TEST(Planner, RejectsBadValues) {
   EXPECT_EQ(f.planner.set_light(0, true, nan3, 1), Status::kInvalidArgument);
   EXPECT_EQ(f.planner.set_light(0, true, neg, 1), Status::kInvalidArgument);
   EXPECT_EQ(f.planner.set_light(0, true, ok, INFINITY), Status::kInvalidArgument);
+}
+
+// An index out of range is a caller bug: it asserts (CODE_STYLE.md), and is refused where
+// asserts are compiled out.
+TEST(Planner, IndexOutOfRangeIsACallerBug) {
+  Fixture f(SyntheticOptions{});
+  const float ok[3] = {1, 1, 1};
+#ifdef NDEBUG
   EXPECT_EQ(f.planner.set_light(99, true, ok, 1), Status::kInvalidArgument);
   EXPECT_EQ(f.planner.set_object_visible(99, true), Status::kInvalidArgument);
+#else
+  EXPECT_DEATH(f.planner.set_light(99, true, ok, 1), "out of range");
+  EXPECT_DEATH(f.planner.set_object_visible(99, true), "out of range");
+#endif
 }
 
 }  // namespace

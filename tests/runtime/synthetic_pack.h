@@ -22,6 +22,7 @@ struct SyntheticOptions {
   float shadow_probability = 0.6f;
   float pair_probability = 0.4f;
   float static_shadow_probability = 0.5f;  // an object shadowing the static lights
+  float intensity = 1.0f;  // multiplies the authored intensities (0.5..4); 1e5: sunlight
   uint32_t seed = 1;
 };
 
@@ -52,7 +53,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     r.name_length = uint32_t(name.size());
     strings += name;
     for (float& c : r.color) c = uniform(0.2f, 1.0f);
-    r.intensity = uniform(0.5f, 4.0f);
+    r.intensity = uniform(0.5f, 4.0f) * o.intensity;
     r.type = kLightPoint;
     lights.push_back(r);
   }

@@ -27,7 +27,9 @@ int preset_samples(Quality q) {
   return 16;
 }
 
-void check_inputs(const Scene& scene, const TexelSet& texels) {
+}  // namespace
+
+void check_bake_inputs(const Scene& scene, const TexelSet& texels) {
   const size_t n = size_t(std::max(0, texels.width)) * size_t(std::max(0, texels.height));
   if (texels.width <= 0 || texels.height <= 0 || texels.position.size() != n ||
       texels.normal.size() != n || texels.valid.size() != n) {
@@ -43,6 +45,8 @@ void check_inputs(const Scene& scene, const TexelSet& texels) {
     }
   }
 }
+
+namespace {
 
 // The largest unit * 2^(k/4) <= v (v, unit > 0, finite). The output step comes from every
 // light of the authored state, and every light group's maps and content hash (cook_jobs.h) from
@@ -142,7 +146,7 @@ float max3(const glm::vec3& v) {
 BakeContext::BakeContext(const Scene& s, const Layout& l, const TexelSet& t, const Tracer& tr,
                          const BakeOptions& o)
     : scene(s), layout(l), texels(t), tracer(tr), options(o), emissive(s) {
-  check_inputs(scene, texels);
+  check_bake_inputs(scene, texels);
   threads = worker_count(o.threads);
   area_samples = o.area_samples > 0 ? o.area_samples : preset_samples(o.quality);
   eps = tracer.epsilon();

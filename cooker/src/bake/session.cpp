@@ -44,13 +44,14 @@ Quality parse_quality(const std::string& name) {
   throw CookError("unknown quality '" + name + "' (expected draft, preview or production)");
 }
 
-const char* integrator_name(Integrator) {
-  return "gather";
+const char* integrator_name(Integrator i) {
+  return i == Integrator::kReference ? "reference" : "gather";
 }
 
 Integrator parse_integrator(const std::string& name) {
   if (name == "gather") return Integrator::kGather;
-  throw CookError("unknown integrator '" + name + "' (expected gather)");
+  if (name == "reference") return Integrator::kReference;
+  throw CookError("unknown integrator '" + name + "' (expected gather or reference)");
 }
 
 GatherPreset gather_preset(const BakeOptions& options) {
@@ -94,6 +95,8 @@ void report_bake(const BakeSession::Impl& impl, Report& report) {
 BakeSession::BakeSession(const Scene& scene, const Layout& layout, const TexelSet& texels,
                          const Tracer& tracer, const BakeOptions& options, Progress& progress,
                          Report& report, GatherStore* store) {
+  if (options.integrator == Integrator::kReference)
+    throw CookError("the reference path tracer bakes single states (bake_reference), not maps");
   progress.begin("plan", 1);
   impl_ = std::make_unique<Impl>(scene, layout, texels, tracer, options, store);
   impl_->rays0 = tracer.rays_traced();

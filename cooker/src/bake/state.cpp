@@ -5,7 +5,6 @@
 
 #include "bake/session.h"
 #include "indirect/integrator.h"
-#include "lightpatch/cooker/error.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -16,44 +15,9 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
   const BakeContext& b = impl_->ctx;
   const Scene& scene = b.scene;
   const TexelSet& texels = b.texels;
-  // Resolve the state by name.
-  std::vector<glm::vec3> radiant(scene.lights.size());  // colour * intensity, 0 when off
-  for (size_t i = 0; i < scene.lights.size(); ++i)
-    radiant[i] = scene.lights[i].color * scene.lights[i].intensity;
-  std::vector<std::string> unknown;
-  for (const auto& [name, o] : state.lights) {
-    size_t i = 0;
-    while (i < scene.lights.size() && scene.lights[i].name != name) ++i;
-    if (i == scene.lights.size()) {
-      unknown.push_back("light '" + name + "'");
-      continue;
-    }
-    const Light& l = scene.lights[i];
-    if (!l.semi_dynamic) {
-      throw CookError("state changes light '" + name +
-                      "', which is static (only semi-dynamic lights can change)");
-    }
-    const glm::vec3 color = o.has_color ? glm::vec3(o.color[0], o.color[1], o.color[2]) : l.color;
-    const float intensity = o.has_intensity ? o.intensity : l.intensity;
-    radiant[i] = (o.has_on && !o.on) ? glm::vec3(0.0f) : color * intensity;
-  }
-  std::vector<uint8_t> visible(scene.objects.size(), 1);
-  for (const auto& [name, vis] : state.objects) {
-    size_t i = 0;
-    while (i < scene.objects.size() && scene.objects[i].name != name) ++i;
-    if (i == scene.objects.size()) {
-      unknown.push_back("object '" + name + "'");
-      continue;
-    }
-    visible[i] = vis ? 1 : 0;
-  }
-  if (!unknown.empty()) {
-    std::string list;
-    for (const std::string& u : unknown) list += (list.empty() ? "" : ", ") + u;
-    throw CookError(
-        "the state names what the scene does not have (or has not marked semiDynamic): " + list);
-  }
-
+  const ResolvedState resolved = resolve_state(scene, state);
+  const std::vector<glm::vec3>& radiant = resolved.radiant;
+  const std::vector<uint8_t>& visible = resolved.visible;
   const int w = texels.width, h = texels.height;
   FloatImage out(w, h, 3);
   const int max_objects = static_cast<int>(scene.objects.size());

@@ -67,6 +67,9 @@ json settings_json(const CookSettings& s) {
           {"texels_per_unit", s.layout.texels_per_unit},
           {"border_texels", s.layout.border_texels},
           {"max_lightmap_size", s.layout.max_lightmap_size},
+          {"unwrap", s.layout.unwrap == UnwrapMode::kAlways  ? "always"
+                     : s.layout.unwrap == UnwrapMode::kNever ? "never"
+                                                             : "auto"},
           {"quality", quality_name(b.quality)},
           {"area_samples", b.area_samples},
           {"seed", b.seed},
@@ -107,6 +110,15 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
     throw CookError(file + ": \"texels_per_unit\" out of range");
   s.layout.border_texels = int_field(j, "border_texels", 0, 64, file);
   s.layout.max_lightmap_size = int_field(j, "max_lightmap_size", 8, 16384, file);
+  const std::string unwrap = field<std::string>(j, "unwrap", file);
+  if (unwrap == "auto")
+    s.layout.unwrap = UnwrapMode::kAuto;
+  else if (unwrap == "always")
+    s.layout.unwrap = UnwrapMode::kAlways;
+  else if (unwrap == "never")
+    s.layout.unwrap = UnwrapMode::kNever;
+  else
+    throw CookError(file + ": \"unwrap\" is not auto, always or never");
   s.bake.quality = parse_quality(field<std::string>(j, "quality", file));
   s.bake.area_samples = int_field(j, "area_samples", 0, 65536, file);
   s.bake.seed = field<uint64_t>(j, "seed", file);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <unordered_map>
@@ -63,8 +64,10 @@ glm::vec3 cosine_dir(const glm::vec3& n, float u, float v) {
 }
 
 // The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
-// same mesh, else the nearest such texel within two texels, else kNoTexel.
-uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels, const Hit& h) {
+// same side of the same mesh; otherwise, of the texels within two of it that do, the one whose
+// sample point lies nearest the hit; kNoTexel if none.
+uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels, const Hit& h,
+                      const glm::vec3& point) {
   const MeshLayout& ml = layout.meshes[size_t(h.mesh)];
   const size_t t3 = size_t(h.triangle) * 3;
   if (t3 + 2 >= ml.indices.size()) return kNoTexel;  // a mesh outside the light map
@@ -82,15 +85,15 @@ uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels, const Hit& h
   const size_t t0 = texels.index(x0, y0);
   if (same_surface(t0)) return uint32_t(t0);
   uint32_t best = kNoTexel;
-  float best_d2 = 1e30f;
+  float best_d2 = std::numeric_limits<float>::max();
   for (int dy = -2; dy <= 2; ++dy) {
     for (int dx = -2; dx <= 2; ++dx) {
       const int x = x0 + dx, y = y0 + dy;
       if (x < 0 || y < 0 || x >= texels.width || y >= texels.height) continue;
       const size_t t = texels.index(x, y);
       if (!same_surface(t)) continue;
-      const float ex = float(x) + 0.5f - fx, ey = float(y) + 0.5f - fy;
-      const float d2 = ex * ex + ey * ey;
+      const glm::vec3 d = texels.position[t] - point;
+      const float d2 = glm::dot(d, d);
       if (d2 < best_d2) {
         best_d2 = d2;
         best = uint32_t(t);
@@ -321,8 +324,9 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   // While tracing, hits are fine texels (or kBackFace); resolved to coarse texels after.
   auto to_fine = [&](const Hit& h, const glm::vec3& origin, const glm::vec3& dir) {
     if (glm::dot(dir, h.geometric_normal) > 0.0f) return kBackFace;
-    return locator ? locator->find(origin + dir * h.t, h.geometric_normal)
-                   : texel_of_hit(layout, texels, h);
+    const glm::vec3 point = origin + dir * h.t;
+    return locator ? locator->find(point, h.geometric_normal)
+                   : texel_of_hit(layout, texels, h, point);
   };
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];

@@ -1,4 +1,5 @@
 // The final-gathering integrator (gather.h, solve.h) behind IndirectIntegrator.
+#include <atomic>
 #include <chrono>
 
 #include "indirect/gather.h"
@@ -56,6 +57,7 @@ class GatherIntegrator final : public IndirectIntegrator {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
     SolveStats st;
     g.indirect = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st);
+    count(st, groups_);
     g.direct_radiance = source;
     g.bounce_radiance = bounce_radiance(op_, g.indirect);
     g.peak = peak(g.indirect);
@@ -69,8 +71,11 @@ class GatherIntegrator final : public IndirectIntegrator {
         blocked.sparse.empty() && blocked.dense.empty()
             ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
             : coarse_source_of(op_, b_.texels, [&](size_t t) { return blocked.at(t); });
-    return solve_change(op_, present, {group.direct_radiance, group.bounce_radiance}, src,
-                        options(threshold, 1));
+    SolveStats st;
+    BounceMap change = solve_change(op_, present, {group.direct_radiance, group.bounce_radiance},
+                                    src, options(threshold, 1), &st);
+    count(st, changes_);
+    return change;
   }
 
   float first_change(const GroupBounce& group, const std::vector<uint8_t>& present) const override {
@@ -85,7 +90,9 @@ class GatherIntegrator final : public IndirectIntegrator {
   void add_state(const FloatImage& direct, const std::vector<uint8_t>& present, float threshold,
                  FloatImage& fine) const override {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
-    add(solve_indirect(op_, present, source, options(threshold, b_.threads)), fine);
+    SolveStats st;
+    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st), fine);
+    count(st, states_);
   }
 
   nlohmann::json describe() const override {
@@ -98,7 +105,9 @@ class GatherIntegrator final : public IndirectIntegrator {
             {"buried_texels", op_.buried_texels},
             {"gather_rays", op_.rays_traced},
             {"crossings", op_.crossings.size()},
-            {"mean_albedo", op_.mean_albedo}};
+            {"mean_albedo", op_.mean_albedo},
+            {"solves",
+             {{"groups", groups_.json()}, {"changes", changes_.json()}, {"states", states_.json()}}}};
   }
 
  private:
@@ -110,9 +119,23 @@ class GatherIntegrator final : public IndirectIntegrator {
     return so;
   }
 
+  // Work done by one kind of solve: how many, their bounces and the stored rays they read.
+  struct Tally {
+    std::atomic<uint64_t> solves{0}, bounces{0}, gathers{0};
+    nlohmann::json json() const {
+      return {{"solves", solves.load()}, {"bounces", bounces.load()}, {"gathers", gathers.load()}};
+    }
+  };
+  static void count(const SolveStats& st, Tally& t) {
+    t.solves += 1;
+    t.bounces += uint64_t(st.bounces);
+    t.gathers += st.gathers;
+  }
+
   const BakeContext& b_;
   GatherPreset preset_;
   GatherOperator op_;
+  mutable Tally groups_, changes_, states_;
 };
 
 }  // namespace

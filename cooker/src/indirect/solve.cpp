@@ -174,8 +174,11 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
   crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
   // First bounce: the blocked direct light's radiance through the rays as they now end, and the
   // radiance those rays no longer see (the static hit's) against what they see instead.
+  // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
+  // on an object included: their tiles are among each tile's sources); a receiver that only has
+  // rays ending on the objects gets their change alone.
   CoarseMap first(nc, glm::vec3(0.0f));
-  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, crossing);
+  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, {});
   gather_into(op, present, direct_change, receivers, options.threads, false, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
   for (uint32_t c : crossing) first[c] += crossing_change(op, present, empty, c);

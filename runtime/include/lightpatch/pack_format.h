@@ -1,4 +1,4 @@
-// lightpatch pack format, version 1: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 2: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -40,7 +40,9 @@
 namespace lightpatch::pack {
 
 constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 'L','P','K','1'
-constexpr uint32_t kVersion = 1;
+// Version 2: MeshRecord grew to 64 bytes with flags and each mesh instance's light-map scale and
+// offset (kMeshFlagTexcoord1).
+constexpr uint32_t kVersion = 2;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
@@ -186,9 +188,18 @@ struct AtlasRecord {
 };
 static_assert(sizeof(AtlasRecord) == 16);
 
-// Light-map UVs of one baked glTF mesh primitive instance, so a game can draw the scene with the
-// layout the cooker chose (unwrapped or verbatim TEXCOORD_1). Vertices refer to the source
-// primitive's vertices; seams duplicate them.
+// MeshRecord::flags.
+enum MeshFlags : uint16_t {
+  // The instance's light-map UVs are its glTF TEXCOORD_1 placed by lightmap_scale_offset:
+  // uv = TEXCOORD_1 * (scale_offset[0], scale_offset[1]) + (scale_offset[2], scale_offset[3])
+  // (Unity's lightmapScaleOffset, in glTF's convention: v = 0 at the top row). A game can keep its
+  // glTF loader's TEXCOORD_1 and apply this per instance; the vertices below give the same UVs.
+  kMeshFlagTexcoord1 = 1u << 0,
+};
+
+// Light-map UVs of one baked glTF mesh primitive instance (one node's primitive), so a game can
+// draw the scene with the layout the cooker chose (unwrapped or TEXCOORD_1). Vertices refer to
+// the glTF primitive's vertices; chart cuts of an unwrap duplicate them.
 struct MeshRecord {
   uint32_t name_offset;    // glTF node name, into kStrings
   uint32_t name_length;    // bytes
@@ -199,13 +210,17 @@ struct MeshRecord {
   uint32_t vertex_count;
   uint32_t index_count;  // multiple of 3; every index < vertex_count
   uint16_t object;       // semi-dynamic object index or kNone16
-  uint16_t reserved0;
+  uint16_t flags;        // MeshFlags; unknown bits are zero
   uint32_t reserved1;
+  // With kMeshFlagTexcoord1: scale (x, y) and offset (z, w), finite; otherwise all zero.
+  float lightmap_scale_offset[4];
 };
-static_assert(sizeof(MeshRecord) == 48);
+static_assert(sizeof(MeshRecord) == 64);
 static_assert(offsetof(MeshRecord, vertex_offset) == 16);
 static_assert(offsetof(MeshRecord, vertex_count) == 32);
 static_assert(offsetof(MeshRecord, object) == 40);
+static_assert(offsetof(MeshRecord, flags) == 42);
+static_assert(offsetof(MeshRecord, lightmap_scale_offset) == 48);
 
 struct MeshVertex {
   uint32_t source_vertex;  // index into the source primitive's vertex attributes

@@ -25,7 +25,8 @@ class PackView {
  public:
   PackView() = default;
 
-  // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give) and on
+  // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give; for bytes
+  // that may not be, e.g. an APK asset's 4-byte alignment, use PackMemory) and on
   // success fills *out. On failure returns the error and fills *error (if non-null) with a
   // message naming the problem; *out is left empty.
   static Status open(const void* data, uint64_t size, PackView* out, Error* error);

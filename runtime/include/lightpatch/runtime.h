@@ -1,29 +1,47 @@
 // lightpatch runtime: the library a game links. It maps nothing itself: the game maps the pack
-// (platform::FileMapping), validates it (PackView::open) and opens a Runtime on it with a GLES 3.0
-// context current. Frame by frame the game sets lights and objects, calls update(budget) once, and
-// samples light_map_texture().
+// (platform::FileMapping, or PackMemory for bytes it holds), validates it (PackView::open) and
+// opens a Runtime on it with a GLES 3.0 context current. Frame by frame the game sets lights and
+// objects, calls update(budget) once, and samples light_map_texture() times light_map_scale().
 //
 // Fixed memory: open() allocates everything (GL objects included): the atlases (uploaded straight
-// from the mapping), two RGBA16F light-map textures (the one the game samples and the one
-// intermediate a rebuild is drawn into; they swap when a rebuild completes), one static vertex
-// buffer and index buffer with every patch's quad in pack order (a group's patches, e.g. a light's
-// contribution, are one contiguous index range: one draw call), one program, one VAO, two FBOs.
-// update() makes no heap allocation and creates no GL object.
+// from the mapping), the light map the game samples (RGBA16F), one accumulator the patches are
+// drawn into, one static vertex and index buffer with every patch's quad in pack order (a group's
+// patches, e.g. a light's contribution, are one contiguous index range: one draw call), the
+// programs, one VAO, two FBOs. update() makes no heap allocation and creates no GL object.
 //
-// Recomposition, budgets, incremental changes and drift control: see planner.h.
+// Recomposition, budgets, incremental changes and drift control: see planner.h. Paths, chosen at
+// open() from what the driver offers (see path()):
+//  * kGpuFloat: an RGBA32F accumulator with additive blending (EXT_color_buffer_float and
+//    EXT_float_blend): the sums are as exact as float arithmetic; the sampled map is written from
+//    it once per completed change or rebuild.
+//  * kGpuHalf: an RGBA16F accumulator (EXT_color_buffer_half_float, EXT_color_buffer_float or
+//    ES 3.2, without float blending). open() probes how the target rounds a blended write (Mesa's
+//    llvmpipe truncates toward zero; drivers differ) and the planner counts a full ulp per write
+//    where it does not round to nearest, which makes it rebuild rather than pile up subtractions.
+//  * kCpu: no renderable float target (or RuntimeLimits::force_cpu_fallback): the same plan runs
+//    on the CPU in double precision (cpu_sink.h) and the changed rows of the light map are
+//    uploaded (glTexSubImage2D) after each frame that presented something.
+//
+// The sampled map holds, per channel, max(L, 0) / light_map_scale() rounded to the nearest half
+// float (ties to even) on every path. Light is never negative: the 8-bit quantization of B, C and
+// S does not cancel exactly where a visible object removes all of a light, and leaves a few
+// quantization steps of either sign there (planner.h); presenting clamps the negative ones at 0.
+// light_map_scale() is a power of two chosen at open() from the pack so that its authored state
+// fits the half-float range with 16x headroom (1 unless the pack is brighter than 4096, e.g. a
+// sun of 100,000 lux); set_light() refuses, with kOutOfRange, a state whose light map could exceed
+// the largest half float times the scale: nothing is ever clamped at the top or wraps negative.
 //
 // Image orientation: texel row 0 of every texture (GL's t = 0 end, the first row uploaded or read
 // back) is the image's top row, glTF v = 0. Sample the light map at (u, v) = the glTF light-map UV
-// unchanged; glReadPixels of the map returns the top row first.
+// unchanged; read_light_map() returns the top row first.
 //
-// Devices without a renderable half-float target (EXT_color_buffer_half_float / ES 3.2): the same
-// plan runs on the CPU into two float buffers and the light map is uploaded (glTexSubImage2D)
-// after each frame that changed it.
+// GL state: update(), restore() and draw_fill_floor() bind their own framebuffer, program, VAO,
+// textures (units 0..8) and blending; they return with framebuffer 0, program 0, VAO 0, blending
+// disabled, texture units 0..8 unbound, active unit 0, and the viewport set to the light map's
+// size. Depth, stencil, scissor and face culling are disabled while drawing and left disabled.
 //
-// GL state: update() and restore() bind their own framebuffer, program, VAO, textures (units 0..7)
-// and blending; they return with framebuffer 0, program 0, VAO 0, blending disabled, texture
-// units 0..7 unbound, active unit 0, and the viewport set to the light map's size. Depth, stencil,
-// scissor and face culling are disabled while drawing and left disabled.
+// GL errors are checked (glGetError, which can stall a driver) only in builds with
+// LIGHTPATCH_GL_CHECKS (CMake option; on in Debug builds); elsewhere update() does not look.
 #pragma once
 
 #include <cstdint>
@@ -37,18 +55,23 @@ namespace lightpatch {
 
 struct RuntimeLimits {
   PlannerLimits planner;
-  // Use the CPU path even where a half-float render target exists (tests, broken drivers).
+  // Use the CPU path even where a renderable float target exists (tests, broken drivers).
   bool force_cpu_fallback = false;
+  // Accumulate in RGBA16F even where float blending exists (tests, comparisons).
+  bool force_half_accumulator = false;
 };
 
-// GPU memory owned by the runtime, in bytes.
+enum class RecomposePath : uint8_t { kGpuFloat, kGpuHalf, kCpu };
+const char* path_name(RecomposePath path);
+
+// Memory owned by the runtime, in bytes.
 struct RuntimeMemory {
   uint64_t atlases = 0;
-  uint64_t light_map = 0;     // the texture the game samples
-  uint64_t intermediate = 0;  // the rebuild target
+  uint64_t light_map = 0;    // the texture the game samples (RGBA16F)
+  uint64_t accumulator = 0;  // the texture the patches are drawn into (0 on the CPU path)
   uint64_t vertex_buffer = 0;
   uint64_t index_buffer = 0;
-  uint64_t cpu_fallback = 0;  // host memory of the CPU path (0 on the GPU path)
+  uint64_t cpu_fallback = 0;  // host memory of the CPU path (0 on the GPU paths)
 };
 
 class Runtime {
@@ -60,7 +83,8 @@ class Runtime {
 
   // Creates every resource in the current context. `pack` (and the memory it views) must outlive
   // the runtime. The wanted state starts at the pack's authored defaults; the first update()s
-  // build it (ready() turns true when the first complete map is presented).
+  // build it (ready() turns true when the first complete map is presented). kOutOfRange when the
+  // authored light map could exceed the float range.
   Status open(const PackView& pack, const RuntimeLimits& limits, Error* error);
   // Deletes the GL objects (the context that made them must be current) and frees memory.
   void close();
@@ -75,8 +99,10 @@ class Runtime {
   int32_t find_light(const char* name) const;
   int32_t find_object(const char* name) const;
 
-  // Wanted state; visible after later update()s (see stats() for latency). kInvalidArgument for
-  // an index out of range or a value that is not finite and >= 0.
+  // Wanted state; visible after later update()s (see stats() for latency). kInvalidArgument for a
+  // value that is not finite and >= 0; kOutOfRange (state unchanged) when the light map of the
+  // resulting state could exceed what the sampled map represents (see light_map_scale()). An
+  // index out of range is a caller bug: it asserts (kInvalidArgument where asserts are off).
   Status set_light(uint32_t light, const LightState& state);
   Status set_light_on(uint32_t light, bool on);
   Status set_light_color(uint32_t light, const float rgb[3]);
@@ -85,62 +111,79 @@ class Runtime {
   LightState light(uint32_t light) const;
   bool object_visible(uint32_t object) const { return planner_.object_visible(object); }
 
-  // Once per frame: at most `budget_texels` texels written (planner.h's budget rule).
-  // kGlError if the driver reported an error.
+  // Once per frame, on an open runtime: at most `budget_texels` texels written (planner.h's
+  // budget rule). kGlError if GL checks are built in and the driver reported an error.
   Status update(uint64_t budget_texels);
 
   // Starts a full rebuild of the wanted state now (spread over the next update()s; a no-op while
   // one runs). The runtime also rebuilds on its own when its drift bound is reached.
   void request_rebuild() { planner_.request_rebuild(); }
 
-  // The texture to sample (RGBA16F, linear irradiance; alpha 1). Its name changes when a rebuild
-  // is presented: read it every frame. Holds a complete map once ready().
-  uint32_t light_map_texture() const;
+  // The texture to sample (RGBA16F; linear irradiance divided by light_map_scale(); alpha 1). Its
+  // name is fixed from open() to close() (restore() makes a new one). Holds a complete map once
+  // ready().
+  uint32_t light_map_texture() const { return light_map_; }
+  // Multiply what the texture holds by this to get irradiance in the lights' units: a power of
+  // two, fixed from open() to close().
+  float light_map_scale() const { return scale_; }
   bool ready() const { return planner_.map_ready(); }
   bool idle() const { return planner_.idle(); }
-  bool gpu_path() const { return !cpu_; }
+  RecomposePath path() const { return path_; }
+  bool gpu_path() const { return path_ != RecomposePath::kCpu; }
+  // How the accumulator rounds (probed at open() on the GPU paths).
+  const TargetPrecision& precision() const { return precision_; }
   const FrameStats& stats() const { return planner_.stats(); }
   const Planner& planner() const { return planner_; }
   RuntimeMemory memory() const { return memory_; }
   uint32_t width() const { return pack_.lightmap_width(); }
   uint32_t height() const { return pack_.lightmap_height(); }
 
-  // Reads the light map back (RGBA float, width*height*4, row 0 = top). For tools and tests: it
-  // stalls the pipeline. `out` must hold width()*height()*4 floats.
+  // Reads the sampled map back as irradiance (RGBA float, times light_map_scale(), width*height*4,
+  // row 0 = top). For tools and tests: it stalls the pipeline. `out` must hold
+  // width()*height()*4 floats.
   Status read_light_map(float* out, Error* error) const;
 
   // Benchmark aid (the fill-rate floor): draws `texels` texels of full-target quads with the patch
-  // program and additive blending into the intermediate, the same per-texel work as a rebuild with
-  // the fewest possible draws. Only while idle() (the intermediate is free then); GPU path only.
+  // program and additive blending into the accumulator, the same per-texel work as a rebuild with
+  // the fewest possible draws. Only while idle() and on a GPU path; it overwrites the accumulator,
+  // so it starts a rebuild (the sampled map keeps the presented state meanwhile).
   Status draw_fill_floor(uint64_t texels, Error* error);
 
  private:
   friend class GlSink;
-  friend class CpuSink;
   Status create_gl(Error* error);
+  Status choose_path(Error* error);
+  Status create_programs(Error* error);
+  Status create_buffers(Error* error);
+  Status probe_rounding(Error* error);
   void delete_gl();
   void forget_gl();
+  void set_draw_state() const;
+  void reset_draw_state() const;
 
   PackView pack_;
   RuntimeLimits limits_;
   Planner planner_;
   bool open_ = false;
-  bool cpu_ = false;
+  RecomposePath path_ = RecomposePath::kCpu;
+  TargetPrecision precision_;
+  float scale_ = 1.0f;          // light_map_scale()
+  float inverse_scale_ = 1.0f;  // 1 / scale_ (exact: a power of two)
   RuntimeMemory memory_;
 
   // GL objects.
   uint32_t* atlas_textures_ = nullptr;  // [atlas_count]
-  uint32_t map_textures_[2] = {0, 0};
-  uint32_t framebuffers_[2] = {0, 0};
-  uint32_t shown_ = 0;  // index of the sampled map in map_textures_
-  uint32_t vbo_ = 0, ibo_ = 0, vao_ = 0, program_ = 0;
-  int32_t factor_location_ = -1, target_size_location_ = -1;
+  uint32_t light_map_ = 0, accumulator_ = 0;
+  uint32_t light_map_fbo_ = 0, accumulator_fbo_ = 0;
+  uint32_t vbo_ = 0, ibo_ = 0, vao_ = 0;
+  uint32_t patch_program_ = 0, present_program_ = 0;
+  int32_t factor_location_ = -1, present_scale_location_ = -1;
   // Per patch: end of the run of following patches whose atlases share a batch of 8 texture
   // units (one draw call per run; with <= 8 atlases every group is one run).
   uint32_t* run_end_ = nullptr;
-  // CPU path: two float RGBA maps.
-  float* cpu_maps_ = nullptr;
-  bool cpu_dirty_ = false;
+  // CPU path: the double accumulator and the half-float map uploaded to the texture.
+  double* cpu_accumulator_ = nullptr;
+  uint16_t* cpu_map_ = nullptr;
 };
 
 }  // namespace lightpatch

@@ -432,8 +432,15 @@ Status Validator::run(Parsed* out) {
       if (m.object != kNone16 && m.object >= h.object_count) {
         return fail(Status::kCorrupt, "mesh %u: object %u out of range", i, m.object);
       }
-      if (m.reserved0 != 0 || m.reserved1 != 0)
-        return fail(Status::kCorrupt, "mesh %u: reserved field not zero", i);
+      if ((m.flags & ~uint16_t(kMeshFlagTexcoord1)) != 0 || m.reserved1 != 0)
+        return fail(Status::kCorrupt, "mesh %u: unknown flags %04x or reserved field not zero", i,
+                    m.flags);
+      for (float f : m.lightmap_scale_offset) {
+        const bool ok = (m.flags & kMeshFlagTexcoord1) ? std::isfinite(f) : f == 0.0f;
+        if (!ok)
+          return fail(Status::kCorrupt, "mesh %u: light-map scale and offset %s", i,
+                      (m.flags & kMeshFlagTexcoord1) ? "not finite" : "set without the flag");
+      }
       if (m.vertex_offset % 4 != 0 || m.index_offset % 4 != 0) {
         return fail(Status::kCorrupt, "mesh %u: vertex or index offset not 4-byte aligned", i);
       }

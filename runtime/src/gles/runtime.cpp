@@ -1,10 +1,14 @@
 #include "lightpatch/runtime.h"
 
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
+#include "lightpatch/cpu_sink.h"
+#include "lightpatch/group_rules.h"
+#include "lightpatch/half_float.h"
 #include "lightpatch/platform/gl.h"
 #include "lightpatch_shaders.h"
 
@@ -12,8 +16,22 @@ namespace lightpatch {
 namespace {
 
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
+constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
 constexpr uint32_t kFloatsPerVertex = 9;
 constexpr uint32_t kVertexBytes = kFloatsPerVertex * sizeof(float);
+// The scale is chosen so that the authored state's bound stays below this (16x headroom below
+// the largest half float).
+constexpr float kAuthoredCeiling = kHalfMax / 16.0f;
+
+#if defined(LIGHTPATCH_GL_CHECKS)
+Status gl_status() {
+  return glGetError() == GL_NO_ERROR ? Status::kOk : Status::kGlError;
+}
+#else
+Status gl_status() {
+  return Status::kOk;
+}
+#endif
 
 bool has_extension(const char* name) {
   GLint count = 0;
@@ -25,15 +43,11 @@ bool has_extension(const char* name) {
   return false;
 }
 
-bool half_float_renderable() {
+bool es_version_at_least(int want_major, int want_minor) {
   const char* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
   int major = 0, minor = 0;
-  if (version && std::sscanf(version, "OpenGL ES %d.%d", &major, &minor) == 2 &&
-      (major > 3 || (major == 3 && minor >= 2))) {
-    return true;
-  }
-  return has_extension("GL_EXT_color_buffer_half_float") ||
-         has_extension("GL_EXT_color_buffer_float");
+  if (!version || std::sscanf(version, "OpenGL ES %d.%d", &major, &minor) != 2) return false;
+  return major > want_major || (major == want_major && minor >= want_minor);
 }
 
 GLuint compile(GLenum type, const char* source, Error* error) {
@@ -52,33 +66,90 @@ GLuint compile(GLenum type, const char* source, Error* error) {
   return shader;
 }
 
-// Decoded sign of a patch: shadow groups are subtracted; kFlagNegative flips.
-float patch_sign(const PackView& pack, const pack::PatchRecord& p) {
-  float s = (p.flags & pack::kFlagNegative) ? -1.0f : 1.0f;
-  if (pack::group_subtracts(pack.group(p.group).kind)) s = -s;
-  return s;
+GLuint link(const char* vertex, const char* fragment, Error* error) {
+  GLuint vs = compile(GL_VERTEX_SHADER, vertex, error);
+  if (!vs) return 0;
+  GLuint fs = compile(GL_FRAGMENT_SHADER, fragment, error);
+  if (!fs) {
+    glDeleteShader(vs);
+    return 0;
+  }
+  GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint linked = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &linked);
+  if (!linked) {
+    char log[200] = {};
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    glDeleteProgram(program);
+    set_error(error, Status::kGlError, "program link failed: %s", log);
+    return 0;
+  }
+  return program;
+}
+
+// A texture of `format` with one level, nearest filtering (texelFetch and exact reads) unless
+// `linear`, clamped at the edges.
+GLuint make_texture(GLenum format, uint32_t w, uint32_t h, bool linear) {
+  GLuint t = 0;
+  glGenTextures(1, &t);
+  glBindTexture(GL_TEXTURE_2D, t);
+  const GLint filter = linear ? GL_LINEAR : GL_NEAREST;
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+  glTexStorage2D(GL_TEXTURE_2D, 1, format, GLsizei(w), GLsizei(h));
+  glBindTexture(GL_TEXTURE_2D, 0);
+  return t;
+}
+
+// A framebuffer on `texture`; 0 (and nothing left behind) when the driver cannot render to it.
+GLuint make_framebuffer(GLuint texture) {
+  GLuint fbo = 0;
+  glGenFramebuffers(1, &fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture, 0);
+  const bool complete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (!complete) glDeleteFramebuffers(1, &fbo);
+  return complete ? fbo : 0;
 }
 
 }  // namespace
 
-// Executes the planner's steps with GL draws.
+const char* path_name(RecomposePath path) {
+  switch (path) {
+    case RecomposePath::kGpuFloat:
+      return "gpu-float";
+    case RecomposePath::kGpuHalf:
+      return "gpu-half";
+    case RecomposePath::kCpu:
+      return "cpu";
+  }
+  return "?";
+}
+
+// Executes the planner's steps with GL draws: patch draws into the accumulator (additive
+// blending), present steps from it into the sampled map (no blending).
 class GlSink final : public DrawSink {
  public:
   explicit GlSink(Runtime& r) : r_(r) {}
-  void bind(uint32_t map) {
-    if (bound_ == int(map)) return;
-    glBindFramebuffer(GL_FRAMEBUFFER, r_.framebuffers_[map]);
-    bound_ = int(map);
-  }
-  void clear_intermediate() override {
-    bind(r_.shown_ ^ 1u);
-    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+  void clear() override {
+    set_mode(kDraw);
+    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
     glClear(GL_COLOR_BUFFER_BIT);
   }
-  void draw(DrawTarget target, uint32_t, uint32_t first, uint32_t count,
-            const float factor[3]) override {
-    bind(target == DrawTarget::kLightMap ? r_.shown_ : r_.shown_ ^ 1u);
-    glUniform3f(r_.factor_location_, factor[0], factor[1], factor[2]);
+  void draw(uint32_t, uint32_t first, uint32_t count, const float factor[3]) override {
+    set_mode(kDraw);
+    // A half-float accumulator holds the presented scale already (runtime.h).
+    const float s = r_.path_ == RecomposePath::kGpuHalf ? r_.inverse_scale_ : 1.0f;
+    glUniform3f(r_.factor_location_, factor[0] * s, factor[1] * s, factor[2] * s);
     const uint32_t end = first + count;
     while (first < end) {
       uint32_t run = r_.run_end_[first];
@@ -92,67 +163,48 @@ class GlSink final : public DrawSink {
         }
         batch_ = int(batch);
       }
-      glDrawElements(GL_TRIANGLES, GLsizei((run - first) * 6), GL_UNSIGNED_INT,
-                     reinterpret_cast<const void*>(uintptr_t(first) * 6 * sizeof(uint32_t)));
+      draw_quads(first, run - first);
       first = run;
     }
   }
-  void present() override {
-    r_.shown_ ^= 1u;
-    bound_ = -1;
+  void present(uint32_t first, uint32_t count) override {
+    set_mode(kPresent);
+    draw_quads(first, count);
+  }
+  void present_all() override {
+    set_mode(kPresent);
+    draw_quads(r_.pack_.patch_count(), 1);  // the full-target quad
   }
 
  private:
-  Runtime& r_;
-  int bound_ = -1;
-  int batch_ = -1;
-};
-
-// The same plan on the CPU (no renderable half-float target): float maps, uploaded after.
-class CpuSink final : public DrawSink {
- public:
-  explicit CpuSink(Runtime& r) : r_(r) {}
-  float* map(uint32_t i) { return r_.cpu_maps_ + size_t(i) * r_.width() * r_.height() * 4; }
-  void clear_intermediate() override {
-    float* m = map(r_.shown_ ^ 1u);
-    const size_t n = size_t(r_.width()) * r_.height();
-    for (size_t i = 0; i < n; ++i) {
-      m[i * 4 + 0] = m[i * 4 + 1] = m[i * 4 + 2] = 0.0f;
-      m[i * 4 + 3] = 1.0f;
-    }
+  enum Mode { kNone, kDraw, kPresent };
+  static void draw_quads(uint32_t first, uint32_t count) {
+    glDrawElements(GL_TRIANGLES, GLsizei(count * 6), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(uintptr_t(first) * 6 * sizeof(uint32_t)));
   }
-  void draw(DrawTarget target, uint32_t, uint32_t first, uint32_t count,
-            const float factor[3]) override {
-    const PackView& pack = r_.pack_;
-    float* m = map(target == DrawTarget::kLightMap ? r_.shown_ : r_.shown_ ^ 1u);
-    if (target == DrawTarget::kLightMap) r_.cpu_dirty_ = true;
-    const uint32_t w = r_.width();
-    for (uint32_t p = first; p < first + count; ++p) {
-      const pack::PatchRecord& pr = pack.patch(p);
-      const uint8_t* atlas = pack.atlas_pixels(pr.atlas);
-      const uint32_t aw = pack.atlas(pr.atlas).width;
-      const float s = pr.scale * patch_sign(pack, pr);
-      const uint32_t step = pr.channel_count == 3 ? 1 : 0;
-      for (uint32_t y = 0; y < pr.height; ++y) {
-        for (uint32_t x = 0; x < pr.width; ++x) {
-          const uint8_t* q = atlas + (size_t(pr.atlas_y + y) * aw + pr.atlas_x + x) * 4;
-          float* out = m + (size_t(pr.dest_y + y) * w + pr.dest_x + x) * 4;
-          for (uint32_t c = 0; c < 3; ++c) {
-            float v = float(q[pr.channel + c * step]) / 255.0f;
-            if (pr.encoding == pack::kEncodingSquare) v *= v;
-            out[c] += v * s * factor[c];
-          }
-        }
+  void set_mode(Mode m) {
+    if (m == mode_) return;
+    if (m == kDraw) {
+      if (mode_ == kPresent) {
+        glActiveTexture(GL_TEXTURE0 + kAccumulatorUnit);
+        glBindTexture(GL_TEXTURE_2D, 0);
       }
+      glBindFramebuffer(GL_FRAMEBUFFER, r_.accumulator_fbo_);
+      glUseProgram(r_.patch_program_);
+      glEnable(GL_BLEND);
+    } else {
+      glBindFramebuffer(GL_FRAMEBUFFER, r_.light_map_fbo_);
+      glUseProgram(r_.present_program_);
+      glDisable(GL_BLEND);
+      glActiveTexture(GL_TEXTURE0 + kAccumulatorUnit);
+      glBindTexture(GL_TEXTURE_2D, r_.accumulator_);
     }
-  }
-  void present() override {
-    r_.shown_ ^= 1u;
-    r_.cpu_dirty_ = true;
+    mode_ = m;
   }
 
- private:
   Runtime& r_;
+  Mode mode_ = kNone;
+  int batch_ = -1;
 };
 
 Runtime::~Runtime() {
@@ -166,6 +218,20 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   limits_ = limits;
   Status s = planner_.init(pack_, limits.planner, error);
   if (s != Status::kOk) return s;
+  // The presentation scale: the smallest power of two that brings the authored state's bound
+  // below the ceiling.
+  const float bound = planner_.wanted_map_bound();
+  if (!(bound <= 1.0e36f)) {
+    return set_error(error, Status::kOutOfRange,
+                     "runtime: the pack's authored light map could exceed the float range "
+                     "(bound %g)",
+                     double(bound));
+  }
+  scale_ = 1.0f;
+  while (bound / scale_ > kAuthoredCeiling) scale_ *= 2.0f;
+  inverse_scale_ = 1.0f / scale_;
+  planner_.set_value_limit(kHalfMax * scale_);
+
   run_end_ = static_cast<uint32_t*>(std::malloc(sizeof(uint32_t) * (pack.patch_count() + 1)));
   atlas_textures_ = static_cast<uint32_t*>(std::calloc(pack.atlas_count() + 1, sizeof(uint32_t)));
   if (!run_end_ || !atlas_textures_) {
@@ -188,12 +254,71 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   return Status::kOk;
 }
 
+Status Runtime::choose_path(Error* error) {
+  const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
+  const bool float_renderable =
+      es_version_at_least(3, 2) || has_extension("GL_EXT_color_buffer_float");
+  const bool float_blend = has_extension("GL_EXT_float_blend");
+  const bool half_renderable = float_renderable || has_extension("GL_EXT_color_buffer_half_float");
+  path_ = RecomposePath::kCpu;
+  if (limits_.force_cpu_fallback) return Status::kOk;
+  light_map_fbo_ = make_framebuffer(light_map_);
+  if (!light_map_fbo_) return Status::kOk;
+  struct Candidate {
+    bool usable;
+    GLenum format;
+    RecomposePath path;
+  };
+  const Candidate candidates[] = {
+      {float_renderable && float_blend && !limits_.force_half_accumulator, GL_RGBA32F,
+       RecomposePath::kGpuFloat},
+      {half_renderable, GL_RGBA16F, RecomposePath::kGpuHalf}};
+  for (const Candidate& c : candidates) {
+    if (!c.usable) continue;
+    accumulator_ = make_texture(c.format, w, h, false);
+    accumulator_fbo_ = make_framebuffer(accumulator_);
+    if (accumulator_fbo_) {
+      path_ = c.path;
+      memory_.accumulator = uint64_t(w) * h * (c.format == GL_RGBA32F ? 16 : 8);
+      return Status::kOk;
+    }
+    glDeleteTextures(1, &accumulator_);
+    accumulator_ = 0;
+  }
+  glDeleteFramebuffers(1, &light_map_fbo_);
+  light_map_fbo_ = 0;
+  return glGetError() == GL_NO_ERROR
+             ? Status::kOk
+             : set_error(error, Status::kGlError, "runtime: GL error choosing the render target");
+}
+
 Status Runtime::create_gl(Error* error) {
   const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
   memory_ = RuntimeMemory();
-  cpu_ = limits_.force_cpu_fallback || !half_float_renderable();
-  shown_ = 0;
+  // Errors the context held before are not ours (glGetError returns one flag per call).
+  for (int i = 0; i < 16 && glGetError() != GL_NO_ERROR; ++i) {
+  }
+  // The map the game samples (linear filtering), then an accumulator the driver can blend into.
+  light_map_ = make_texture(GL_RGBA16F, w, h, true);
+  memory_.light_map = uint64_t(w) * h * 8;
+  if (Status s = choose_path(error); s != Status::kOk) return s;
 
+  if (path_ == RecomposePath::kCpu) {
+    const size_t texels = size_t(w) * h;
+    if (!cpu_accumulator_) {
+      cpu_accumulator_ = static_cast<double*>(std::calloc(texels * 3, sizeof(double)));
+      cpu_map_ = static_cast<uint16_t*>(std::calloc(texels * 4, sizeof(uint16_t)));
+    }
+    if (!cpu_accumulator_ || !cpu_map_) {
+      return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
+    }
+    memory_.cpu_fallback = texels * (3 * sizeof(double) + 4 * sizeof(uint16_t));
+    precision_ = TargetPrecision{1.1102230e-16f, false};  // double
+    planner_.set_precision(precision_);
+    return glGetError() == GL_NO_ERROR
+               ? Status::kOk
+               : set_error(error, Status::kGlError, "runtime: GL error creating textures");
+  }
   // Atlases, straight from the mapping (rows top to bottom = texture rows 0..h-1).
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   glGenTextures(GLsizei(pack_.atlas_count()), atlas_textures_);
@@ -207,74 +332,45 @@ Status Runtime::create_gl(Error* error) {
                  GL_UNSIGNED_BYTE, pack_.atlas_pixels(a));
     memory_.atlases += uint64_t(ar.width) * ar.height * 4;
   }
-  // The light map and the intermediate.
-  glGenTextures(2, map_textures_);
-  for (uint32_t i = 0; i < 2; ++i) {
-    glBindTexture(GL_TEXTURE_2D, map_textures_[i]);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA16F, GLsizei(w), GLsizei(h));
-  }
-  memory_.light_map = memory_.intermediate = uint64_t(w) * h * 8;
   glBindTexture(GL_TEXTURE_2D, 0);
+  if (Status s = create_programs(error); s != Status::kOk) return s;
+  if (Status s = create_buffers(error); s != Status::kOk) return s;
+  if (Status s = probe_rounding(error); s != Status::kOk) return s;
+  planner_.set_precision(precision_);
+  if (glGetError() != GL_NO_ERROR) {
+    return set_error(error, Status::kGlError, "runtime: GL error while creating resources");
+  }
+  return Status::kOk;
+}
 
-  if (!cpu_) {
-    glGenFramebuffers(2, framebuffers_);
-    for (uint32_t i = 0; i < 2 && !cpu_; ++i) {
-      glBindFramebuffer(GL_FRAMEBUFFER, framebuffers_[i]);
-      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, map_textures_[i],
-                             0);
-      if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) cpu_ = true;
-    }
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  }
-  if (cpu_) {
-    const size_t floats = size_t(w) * h * 4 * 2;
-    if (!cpu_maps_) cpu_maps_ = static_cast<float*>(std::calloc(floats, sizeof(float)));
-    if (!cpu_maps_) return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
-    memory_.cpu_fallback = floats * sizeof(float);
-    return glGetError() == GL_NO_ERROR
-               ? Status::kOk
-               : set_error(error, Status::kGlError, "runtime: GL error creating textures");
-  }
-
-  // Program.
-  GLuint vs = compile(GL_VERTEX_SHADER, shaders::patch_vert, error);
-  if (!vs) return Status::kGlError;
-  GLuint fs = compile(GL_FRAGMENT_SHADER, shaders::patch_frag, error);
-  if (!fs) {
-    glDeleteShader(vs);
-    return Status::kGlError;
-  }
-  program_ = glCreateProgram();
-  glAttachShader(program_, vs);
-  glAttachShader(program_, fs);
-  glLinkProgram(program_);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint linked = 0;
-  glGetProgramiv(program_, GL_LINK_STATUS, &linked);
-  if (!linked) {
-    char log[200] = {};
-    glGetProgramInfoLog(program_, sizeof log, nullptr, log);
-    return set_error(error, Status::kGlError, "program link failed: %s", log);
-  }
-  factor_location_ = glGetUniformLocation(program_, "u_factor");
-  target_size_location_ = glGetUniformLocation(program_, "u_target_size");
-  glUseProgram(program_);
+Status Runtime::create_programs(Error* error) {
+  const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
+  patch_program_ = link(shaders::patch_vert, shaders::patch_frag, error);
+  if (!patch_program_) return Status::kGlError;
+  present_program_ = link(shaders::present_vert, shaders::present_frag, error);
+  if (!present_program_) return Status::kGlError;
+  factor_location_ = glGetUniformLocation(patch_program_, "u_factor");
+  glUseProgram(patch_program_);
   for (uint32_t u = 0; u < kUnits; ++u) {
     char name[16];
     std::snprintf(name, sizeof name, "u_atlas[%u]", u);
-    glUniform1i(glGetUniformLocation(program_, name), GLint(u));
+    glUniform1i(glGetUniformLocation(patch_program_, name), GLint(u));
   }
-  glUniform2f(target_size_location_, float(w), float(h));
+  glUniform2f(glGetUniformLocation(patch_program_, "u_target_size"), float(w), float(h));
+  glUseProgram(present_program_);
+  glUniform1i(glGetUniformLocation(present_program_, "u_accumulator"), GLint(kAccumulatorUnit));
+  glUniform2f(glGetUniformLocation(present_program_, "u_target_size"), float(w), float(h));
+  // The float accumulator holds irradiance; the half one holds it scaled already.
+  glUniform1f(glGetUniformLocation(present_program_, "u_scale"),
+              path_ == RecomposePath::kGpuFloat ? inverse_scale_ : 1.0f);
   glUseProgram(0);
+  return Status::kOk;
+}
 
+Status Runtime::create_buffers(Error* error) {
+  const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
   // Vertex and index buffers: 4 vertices and 6 indices per patch, pack order, plus one
-  // full-target quad at the end (the fill-rate floor).
+  // full-target quad at the end (the whole-map present and the fill-rate floor).
   const uint32_t quads = pack_.patch_count() + 1;
   const size_t vbytes = size_t(quads) * 4 * kVertexBytes;
   const size_t ibytes = size_t(quads) * 6 * sizeof(uint32_t);
@@ -289,14 +385,16 @@ Status Runtime::create_gl(Error* error) {
     float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit;
     if (q < pack_.patch_count()) {
       const pack::PatchRecord& p = pack_.patch(q);
+      // The destination and the atlas rectangle are given separately: a patch drawn magnified
+      // from a smaller atlas rectangle needs only other atlas corners here.
       dx0 = p.dest_x, dy0 = p.dest_y, dx1 = dx0 + p.width, dy1 = dy0 + p.height;
       ax0 = p.atlas_x, ay0 = p.atlas_y, ax1 = ax0 + p.width, ay1 = ay0 + p.height;
-      params[0] = p.scale * patch_sign(pack_, p);
+      params[0] = p.scale * patch_sign(pack_.group(p.group).kind, p.flags);
       params[1] = p.channel;
       params[2] = p.channel_count;
       params[3] = p.encoding == pack::kEncodingSquare ? 1.0f : 0.0f;
       unit = float(p.atlas % kUnits);
-    } else {  // the floor quad: the whole target, sampling atlas 0 stretched over it
+    } else {  // the full-target quad, sampling atlas 0 stretched over it (fill-rate floor)
       const pack::AtlasRecord& a0 = pack_.atlas(0);
       dx0 = dy0 = 0.0f, dx1 = float(w), dy1 = float(h);
       ax0 = ay0 = 0.0f, ax1 = float(a0.width), ay1 = float(a0.height);
@@ -340,38 +438,83 @@ Status Runtime::create_gl(Error* error) {
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   memory_.vertex_buffer = vbytes;
   memory_.index_buffer = ibytes;
+  return Status::kOk;
+}
+
+// Blends 0.75 and 0.25 ulp onto 1 in one texel of the accumulator and reads it back: round to
+// nearest gives 1 + ulp and 1, truncation 1 and 1, rounding up 1 + ulp twice. Anything but round
+// to nearest counts a full ulp per write.
+Status Runtime::probe_rounding(Error* error) {
+  const bool half = path_ == RecomposePath::kGpuHalf;
+  const float ulp = half ? 1.0f / 1024.0f : 1.0f / 8388608.0f;
+  GLuint program = link(shaders::present_vert, shaders::probe_frag, error);
+  if (!program) return Status::kGlError;
+  glBindFramebuffer(GL_FRAMEBUFFER, accumulator_fbo_);
+  glViewport(0, 0, GLsizei(pack_.lightmap_width()), GLsizei(pack_.lightmap_height()));
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(0, 0, 1, 1);
+  glClearColor(1.0f, 1.0f, 1.0f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT);
+  glUseProgram(program);
+  glUniform2f(glGetUniformLocation(program, "u_target_size"), float(pack_.lightmap_width()),
+              float(pack_.lightmap_height()));
+  glUniform4f(glGetUniformLocation(program, "u_value"), 0.75f * ulp, 0.25f * ulp, 0.0f, 0.0f);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFunc(GL_ONE, GL_ONE);
+  glBindVertexArray(vao_);
+  glDrawElements(GL_TRIANGLES, 6, GL_UNSIGNED_INT,
+                 reinterpret_cast<const void*>(uintptr_t(pack_.patch_count()) * 6 * 4));
+  glBindVertexArray(0);
+  glDisable(GL_BLEND);
+  glDisable(GL_SCISSOR_TEST);
+  float texel[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadPixels(0, 0, 1, 1, GL_RGBA, GL_FLOAT, texel);
+  glUseProgram(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glDeleteProgram(program);
   if (glGetError() != GL_NO_ERROR) {
-    return set_error(error, Status::kGlError, "runtime: GL error while creating resources");
+    return set_error(error, Status::kGlError, "runtime: GL error probing the %s accumulator",
+                     path_name(path_));
   }
+  const bool nearest = texel[0] == 1.0f + ulp && texel[1] == 1.0f;
+  precision_.truncates = !nearest;
+  precision_.unit_roundoff = nearest ? 0.5f * ulp : ulp;
   return Status::kOk;
 }
 
 void Runtime::delete_gl() {
   if (atlas_textures_) glDeleteTextures(GLsizei(pack_.atlas_count()), atlas_textures_);
-  glDeleteTextures(2, map_textures_);
-  if (framebuffers_[0]) glDeleteFramebuffers(2, framebuffers_);
+  const GLuint textures[2] = {light_map_, accumulator_};
+  glDeleteTextures(2, textures);
+  const GLuint fbos[2] = {light_map_fbo_, accumulator_fbo_};
+  glDeleteFramebuffers(2, fbos);
   if (vbo_) glDeleteBuffers(1, &vbo_);
   if (ibo_) glDeleteBuffers(1, &ibo_);
   if (vao_) glDeleteVertexArrays(1, &vao_);
-  if (program_) glDeleteProgram(program_);
+  if (patch_program_) glDeleteProgram(patch_program_);
+  if (present_program_) glDeleteProgram(present_program_);
   forget_gl();
 }
 
 void Runtime::forget_gl() {
   if (atlas_textures_) std::memset(atlas_textures_, 0, sizeof(uint32_t) * pack_.atlas_count());
-  map_textures_[0] = map_textures_[1] = 0;
-  framebuffers_[0] = framebuffers_[1] = 0;
-  vbo_ = ibo_ = vao_ = program_ = 0;
+  light_map_ = accumulator_ = 0;
+  light_map_fbo_ = accumulator_fbo_ = 0;
+  vbo_ = ibo_ = vao_ = patch_program_ = present_program_ = 0;
 }
 
 void Runtime::close() {
   if (open_) delete_gl();
   std::free(atlas_textures_);
   std::free(run_end_);
-  std::free(cpu_maps_);
+  std::free(cpu_accumulator_);
+  std::free(cpu_map_);
   atlas_textures_ = nullptr;
   run_end_ = nullptr;
-  cpu_maps_ = nullptr;
+  cpu_accumulator_ = nullptr;
+  cpu_map_ = nullptr;
   open_ = false;
 }
 
@@ -401,18 +544,21 @@ Status Runtime::set_light(uint32_t i, const LightState& state) {
   return planner_.set_light(i, state.on, state.color, state.intensity);
 }
 Status Runtime::set_light_on(uint32_t i, bool on) {
+  assert(i < light_count() && "set_light_on: light index out of range");
   if (i >= light_count()) return Status::kInvalidArgument;
   LightState s = light(i);
   s.on = on;
   return set_light(i, s);
 }
 Status Runtime::set_light_color(uint32_t i, const float rgb[3]) {
+  assert(i < light_count() && "set_light_color: light index out of range");
   if (i >= light_count()) return Status::kInvalidArgument;
   LightState s = light(i);
   std::memcpy(s.color, rgb, sizeof s.color);
   return set_light(i, s);
 }
 Status Runtime::set_light_intensity(uint32_t i, float intensity) {
+  assert(i < light_count() && "set_light_intensity: light index out of range");
   if (i >= light_count()) return Status::kInvalidArgument;
   LightState s = light(i);
   s.intensity = intensity;
@@ -422,81 +568,85 @@ Status Runtime::set_object_visible(uint32_t i, bool visible) {
   return planner_.set_object_visible(i, visible);
 }
 
-uint32_t Runtime::light_map_texture() const {
-  return map_textures_[shown_];
-}
-
-Status Runtime::update(uint64_t budget_texels) {
-  if (!open_) return Status::kInvalidArgument;
-  if (cpu_) {
-    CpuSink sink(*this);
-    planner_.update(budget_texels, sink);
-    if (cpu_dirty_ && planner_.map_ready()) {
-      glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      glBindTexture(GL_TEXTURE_2D, map_textures_[shown_]);
-      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GLsizei(width()), GLsizei(height()), GL_RGBA,
-                      GL_FLOAT, sink.map(shown_));
-      glBindTexture(GL_TEXTURE_2D, 0);
-      cpu_dirty_ = false;
-    }
-    return glGetError() == GL_NO_ERROR ? Status::kOk : Status::kGlError;
-  }
+void Runtime::set_draw_state() const {
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_STENCIL_TEST);
   glDisable(GL_SCISSOR_TEST);
   glDisable(GL_CULL_FACE);
-  glEnable(GL_BLEND);
   glBlendEquation(GL_FUNC_ADD);
   glBlendFunc(GL_ONE, GL_ONE);
   glViewport(0, 0, GLsizei(width()), GLsizei(height()));
-  glUseProgram(program_);
   glBindVertexArray(vao_);
-  GlSink sink(*this);
-  planner_.update(budget_texels, sink);
+}
+
+void Runtime::reset_draw_state() const {
   glBindVertexArray(0);
   glUseProgram(0);
   glDisable(GL_BLEND);
-  for (uint32_t u = kUnits; u-- > 0;) {
+  glDisable(GL_SCISSOR_TEST);
+  for (uint32_t u = kAccumulatorUnit + 1; u-- > 0;) {
     glActiveTexture(GL_TEXTURE0 + u);
     glBindTexture(GL_TEXTURE_2D, 0);
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  return glGetError() == GL_NO_ERROR ? Status::kOk : Status::kGlError;
+}
+
+Status Runtime::update(uint64_t budget_texels) {
+  assert(open_ && "update: the runtime is not open");
+  if (!open_) return Status::kInvalidArgument;
+  if (path_ == RecomposePath::kCpu) {
+    CpuSink sink;
+    sink.bind(&pack_, cpu_accumulator_, nullptr, cpu_map_, inverse_scale_);
+    planner_.update(budget_texels, sink);
+    if (sink.dirty_end() > sink.dirty_begin()) {  // upload the rows that changed
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+      glBindTexture(GL_TEXTURE_2D, light_map_);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, GLint(sink.dirty_begin()), GLsizei(width()),
+                      GLsizei(sink.dirty_end() - sink.dirty_begin()), GL_RGBA, GL_HALF_FLOAT,
+                      cpu_map_ + size_t(sink.dirty_begin()) * width() * 4);
+      glBindTexture(GL_TEXTURE_2D, 0);
+    }
+    return gl_status();
+  }
+  set_draw_state();
+  GlSink sink(*this);
+  planner_.update(budget_texels, sink);
+  reset_draw_state();
+  return gl_status();
 }
 
 Status Runtime::read_light_map(float* out, Error* error) const {
+  assert(out != nullptr && "read_light_map: null output");
   if (!open_) return set_error(error, Status::kInvalidArgument, "runtime: not open");
   const size_t n = size_t(width()) * height() * 4;
-  if (cpu_) {
-    std::memcpy(out, cpu_maps_ + n * shown_, n * sizeof(float));
+  if (path_ == RecomposePath::kCpu) {
+    for (size_t i = 0; i < n; ++i) {
+      out[i] = (i & 3) == 3 ? 1.0f : half_to_float(cpu_map_[i]) * scale_;
+    }
     return Status::kOk;
   }
-  GLuint fbo = framebuffers_[shown_];
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, light_map_fbo_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glReadPixels(0, 0, GLsizei(width()), GLsizei(height()), GL_RGBA, GL_FLOAT, out);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (glGetError() != GL_NO_ERROR) {
     return set_error(error, Status::kGlError, "runtime: glReadPixels of the light map failed");
   }
+  for (size_t i = 0; i < n; ++i) {
+    if ((i & 3) != 3) out[i] *= scale_;
+  }
   return Status::kOk;
 }
 
 Status Runtime::draw_fill_floor(uint64_t texels, Error* error) {
-  if (!open_ || cpu_ || !idle()) {
+  if (!open_ || !gpu_path() || !idle()) {
     return set_error(error, Status::kInvalidArgument, "fill floor: needs an idle GPU-path runtime");
   }
   const uint64_t full = uint64_t(width()) * height();
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_STENCIL_TEST);
-  glDisable(GL_CULL_FACE);
+  set_draw_state();
   glEnable(GL_BLEND);
-  glBlendEquation(GL_FUNC_ADD);
-  glBlendFunc(GL_ONE, GL_ONE);
-  glViewport(0, 0, GLsizei(width()), GLsizei(height()));
-  glUseProgram(program_);
-  glBindVertexArray(vao_);
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffers_[shown_ ^ 1u]);
+  glUseProgram(patch_program_);
+  glBindFramebuffer(GL_FRAMEBUFFER, accumulator_fbo_);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, atlas_textures_[0]);
   glUniform3f(factor_location_, 0.0f, 0.0f, 0.0f);
@@ -510,12 +660,8 @@ Status Runtime::draw_fill_floor(uint64_t texels, Error* error) {
     }
     glDrawElements(GL_TRIANGLES, 6, GL_UNSIGNED_INT, quad);
   }
-  glDisable(GL_SCISSOR_TEST);
-  glBindVertexArray(0);
-  glUseProgram(0);
-  glDisable(GL_BLEND);
-  glBindTexture(GL_TEXTURE_2D, 0);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  reset_draw_state();
+  planner_.request_rebuild();  // the accumulator no longer holds the presented state
   return glGetError() == GL_NO_ERROR ? Status::kOk
                                      : set_error(error, Status::kGlError, "fill floor: GL error");
 }

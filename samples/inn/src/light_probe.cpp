@@ -64,7 +64,7 @@ float LightProbe::measure(const Runtime& runtime, const std::vector<glm::ivec2>&
     for (const glm::ivec2& t : texels) {
       float rgba[4] = {};
       glReadPixels(t.x, t.y, 1, 1, GL_RGBA, GL_FLOAT, rgba);
-      sum += luminance(rgba);
+      sum += luminance(rgba) * runtime.light_map_scale();
     }
   }
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, 0, 0);

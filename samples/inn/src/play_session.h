@@ -22,23 +22,27 @@
 
 namespace lightpatch::inn {
 
+constexpr uint64_t kWindowBudgetTexels = 1u << 18;
+
 struct PlayOptions {
   std::string scene = "demo-out/inn.glb";
   std::string pack = "demo-out/inn.lpk";
   bool headless = false;
   std::string script;         // "default": the scenario beside the scene
   std::string out;            // headless: output folder
-  int width = 0, height = 0;  // 0: 1280x720 windowed, 960x540 headless
-  // Texels recomposed per frame; 0: half the light map's area (on llvmpipe a full-area frame of
-  // recomposition costs about as much as drawing the inn twice).
+  int width = 0, height = 0;  // 0: 960x540
+  // Texels recomposed per frame; 0: half the light map's area headless, at most
+  // kWindowBudgetTexels in a window (on llvmpipe a full-area frame of recomposition costs about
+  // as much as drawing the inn twice).
   uint64_t budget = 0;
   float exposure = 1.5f;
-  // The planner's drift bound (planner.h) sums, per incremental draw, half an ulp of the largest
-  // value any texel could take; flicker makes dozens of draws per frame, so the runtime's default
-  // of 32 ulps forces a rebuild every frame or two. The real error is far smaller (the scripted
-  // run measures it against a rebuild: summary.json "drift"); 512 keeps rebuilds occasional.
-  float drift_ulps = 512.0f;
-  bool force_cpu = false;  // the runtime's CPU path (devices without half-float targets)
+  // The planner's drift tolerance (planner.h) in half-float ulps (2^-11) of each texel's
+  // magnitude; the runtime's default, 2. The scripted run measures the real drift against a
+  // rebuild (summary.json "drift").
+  float drift_ulps = 2.0f;
+  bool force_cpu = false;  // the runtime's CPU path (devices without renderable float targets)
+  // Windowed: quit after this many frames and print the frame times (0: play until Esc).
+  int frames = 0;
 };
 
 struct PlaySession {

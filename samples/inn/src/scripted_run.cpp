@@ -141,7 +141,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     f.light_map = rt.light_map_texture();
     f.object_visible = visible.data();
     f.flame = flames.data();
-    f.exposure = o.exposure;
+    f.exposure = o.exposure * rt.light_map_scale();
     f.viewport_width = o.width;
     f.viewport_height = o.height;
     s.renderer.draw(f);
@@ -412,10 +412,11 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   summary["lightmap"] = {rt.width(), rt.height()};
   summary["budget_texels"] = s.budget;
   summary["gpu_path"] = rt.gpu_path();
+  summary["path"] = path_name(rt.path());
   summary["renderer"] = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   summary["runtime_memory_bytes"] = {
       {"atlases", m.atlases},           {"light_map", m.light_map},
-      {"intermediate", m.intermediate}, {"vertex_buffer", m.vertex_buffer},
+      {"accumulator", m.accumulator},   {"vertex_buffer", m.vertex_buffer},
       {"index_buffer", m.index_buffer}, {"cpu_fallback", m.cpu_fallback}};
   summary["game_geometry_bytes"] =
       s.world.vertices.size() * sizeof(WorldVertex) + s.world.indices.size() * 4;
@@ -429,7 +430,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           ? 0.0
           : static_cast<double>(busy_texels) / static_cast<double>(busy_recompose.size());
   summary["render_ms_mean"] = mean(render);
-  summary["drift"] = {{"planner_error_bound", error_bound},
+  summary["drift"] = {{"planner_relative_error_bound", error_bound},
                       {"max_abs_difference_vs_rebuild", drift_max},
                       {"max_relative_difference", drift_relative},
                       {"map_max", map_max},
@@ -460,7 +461,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   std::printf(
       "drift after the flicker benchmark: max |incremental - rebuilt| = %.4g (relative %.3g; map "
       "max %.4g, "
-      "planner bound %.4g)\n",
+      "planner bound %.4g of each texel)\n",
       drift_max, drift_relative, map_max, error_bound);
   std::printf("output: %s (screenshots, frames.csv, steps.csv, summary.json)\n",
               std::filesystem::absolute(dir).string().c_str());

@@ -18,7 +18,7 @@ constexpr double kPi = 3.14159265358979;
 
 double furnace_flux(float rho, int n) {
   Scene s = test::furnace_box(rho);
-  s.lights = {test::point_light("lamp", {0.13f, 0.21f, -0.17f}, 1.0f)};
+  s.lights = {test::furnace_lamp()};
   TexelSet texels = test::box_texels({-1, -1, -1}, {1, 1, 1}, n);
   texels.albedo.assign(texels.albedo.size(), glm::vec3(rho));  // gathering reads texel albedo
   auto tracer = make_embree_tracer(s);

@@ -24,10 +24,11 @@ enum class Quality { kDraft, kPreview, kProduction };
 const char* quality_name(Quality q);
 Quality parse_quality(const std::string& name);  // throws CookError
 
-// How bounce light is computed. kGather: final gathering on coarse texels with the light map as
-// radiance cache, multiple bounces by iteration and a geometry-guided denoiser (the cook's
-// integrator; src/indirect/gather.h).
-enum class Integrator { kGather };
+// How light is integrated. kGather: the cook's integrator, final gathering on coarse texels with
+// the light map as radiance cache, multiple bounces by iteration and a geometry-guided denoiser
+// (src/indirect/gather.h). kReference: the independent path tracer (reference_integrator.h),
+// which bakes single states only (bake-state, accuracy), never packs.
+enum class Integrator { kGather, kReference };
 const char* integrator_name(Integrator i);
 Integrator parse_integrator(const std::string& name);  // throws CookError
 
@@ -56,6 +57,10 @@ struct BakeOptions {
   // pinned keeps every job's hash through edits that move its percentile (cook_jobs.h).
   float output_step = 0.0f;
 };
+
+// Throws CookError when the texel set's arrays disagree with its size or a light has a negative
+// or non-finite value: what every integrator checks before it lights texels.
+void check_bake_inputs(const Scene& scene, const TexelSet& texels);
 
 // The final-gathering preset after overrides.
 struct GatherPreset {

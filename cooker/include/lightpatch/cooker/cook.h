@@ -13,6 +13,7 @@
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/pack_builder.h"
 #include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/reference_integrator.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/scene.h"
 #include "lightpatch/cooker/state_spec.h"
@@ -51,5 +52,9 @@ std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, 
 // Bakes one state directly and finalizes it: the map `bake-state` writes.
 FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const BakeOptions& bake,
                       Progress& progress, Report& report);
+// The same by the reference path tracer: its map and standard-error map, both finalized.
+ReferenceBake cook_reference_state(const PreparedScene& p, const StateSpec& state,
+                                   const ReferenceOptions& options, Progress& progress,
+                                   Report& report);
 
 }  // namespace lightpatch::cooker

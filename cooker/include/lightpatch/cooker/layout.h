@@ -18,10 +18,15 @@ struct Rect {
 
 // Light-map UVs of one MeshInstance. Vertices are split where charts are cut, so each layout
 // vertex refers back to a source vertex of the MeshInstance.
+// Empty for a mesh kept out of the light map (lightmapExclude).
 struct MeshLayout {
   std::vector<uint32_t> source_vertex;  // layout vertex -> MeshInstance vertex
   std::vector<glm::vec2> uv;            // light-map UV in [0,1], glTF convention
   std::vector<uint32_t> indices;        // one triangle per source triangle, same order
+  // Laid out by its own TEXCOORD_1: uv = TEXCOORD_1 * (x, y) + (z, w) (Unity's
+  // lightmapScaleOffset, in glTF's v-down convention); the layout vertices are the mesh's.
+  bool from_uv1 = false;
+  glm::vec4 uv1_scale_offset{0.0f};
 };
 
 // A baked object: one glTF node's meshes, owning one rectangle of the light map that no other
@@ -31,6 +36,10 @@ struct Region {
   int object = -1;          // semi-dynamic object index or -1
   std::vector<int> meshes;  // MeshInstance indices
   Rect rect;
+  // The charts' rectangles inside `rect`, each with its border (LayoutOptions::border_texels) of
+  // empty texels: one per unwrapped chart, one for a node's whole TEXCOORD_1 layout; empty for a
+  // whole-scene TEXCOORD_1 layout.
+  std::vector<Rect> charts;
 };
 
 // An edge of a smooth surface (its two triangles share both source vertices, so both normals)
@@ -39,19 +48,27 @@ struct Region {
 struct SeamEdge {
   glm::vec2 a0, a1;  // the edge in the first chart
   glm::vec2 b0, b1;  // the same edge in the second chart (b0 is the same point as a0)
+  glm::vec2 a2, b2;  // the opposite corner of the edge's triangle in each chart (its inside)
 };
+
+// Where light-map UVs come from (--unwrap): kAuto uses each node's TEXCOORD_1 when all its
+// meshes have one and unwraps the others; kAlways ignores TEXCOORD_1; kNever requires it.
+enum class UnwrapMode { kAuto, kAlways, kNever };
 
 struct LayoutOptions {
   int lightmap_size = 0;         // > 0: fixed page size (texels, square); 0 = derive from density
   float texels_per_unit = 0.0f;  // > 0: texels per metre; 0 = default for a room-sized scene
   int border_texels = 2;         // empty texels around each chart
   int max_lightmap_size = 4096;
+  UnwrapMode unwrap = UnwrapMode::kAuto;
 };
 
 struct Layout {
   int width = 0, height = 0;       // texels
   float texels_per_unit = 0;       // the density actually used (may be lowered to fit)
-  bool verbatim_uv1 = false;       // every mesh had a valid TEXCOORD_1
+  bool verbatim_uv1 = false;       // one TEXCOORD_1 layout over the whole scene, used as it is
+  int uv1_regions = 0;             // nodes placed by their own TEXCOORD_1 (scale and offset)
+  int unwrapped_regions = 0;       // nodes the cooker unwrapped
   std::vector<MeshLayout> meshes;  // parallel to Scene::meshes
   std::vector<Region> regions;
   std::vector<SeamEdge> seams;

@@ -12,7 +12,7 @@ namespace lightpatch::cooker {
 // colour) the counts taken and skipped in each run; per light group its pass seconds in each run.
 // Adds "time_saved_s" to the planned decisions whose saved time is measured on its own: an
 // indirect group the plan skipped (the group's whole pass, forced minus planned) and an object
-// bounce it skipped (the forced run's photon change for that object). Both arguments are report
+// bounce it skipped (the forced run's change for that object). Both arguments are report
 // roots (Report::root()).
 void add_plan_measurement(nlohmann::json& planned, const nlohmann::json& forced);
 

@@ -40,8 +40,14 @@ struct MeshInstance {
   std::vector<glm::vec3> positions;  // world space
   std::vector<glm::vec3> normals;    // world space, unit length (import generates if absent)
   std::vector<glm::vec2> uv0;        // TEXCOORD_0 or empty
-  std::vector<glm::vec2> uv1;        // TEXCOORD_1 (verbatim light-map UVs) or empty
+  std::vector<glm::vec2> uv1;        // TEXCOORD_1 (light-map UVs in [0,1]) or empty
   std::vector<uint32_t> indices;     // triangle list, every index < positions.size()
+  // The glTF vertex (of the primitive's attributes) behind each vertex, where the importer
+  // unwelded the primitive (no normals: one vertex per triangle corner); empty: the same index.
+  std::vector<uint32_t> gltf_vertex;
+  glm::mat4 world{1.0f};          // the node's world transform (positions are already in it)
+  float lightmap_scale = 1.0f;    // the node's extras.lightmapScale: texel density factor, > 0
+  bool lightmap_exclude = false;  // the node's extras.lightmapExclude: an occluder, not baked
 };
 
 enum class LightType { kPoint, kSpot, kDirectional };

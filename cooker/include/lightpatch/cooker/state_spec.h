@@ -2,9 +2,14 @@
 // bake-state and recompose; names the scene or pack lacks are an error naming them.
 #pragma once
 
+#include <glm/glm.hpp>
+
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
+
+#include "lightpatch/cooker/scene.h"
 
 namespace lightpatch::cooker {
 
@@ -24,5 +29,14 @@ StateSpec parse_state_json(const std::string& text, const std::string& what);  /
 StateSpec load_state_file(const std::string& path);                            // throws CookError
 // --states: one JSON state per non-empty line.
 std::vector<StateSpec> load_states_jsonl(const std::string& path);  // throws CookError
+
+// A state resolved against a scene: what every integrator that bakes a state lights with.
+struct ResolvedState {
+  std::vector<glm::vec3> radiant;  // per Scene::lights: colour * intensity, (0,0,0) when off
+  std::vector<uint8_t> visible;    // per Scene::objects: 1 = present
+};
+// Static lights keep their authored colour and intensity; throws CookError when the state changes
+// a static light or names a light or object the scene lacks (or has not marked semiDynamic).
+ResolvedState resolve_state(const Scene& scene, const StateSpec& state);
 
 }  // namespace lightpatch::cooker

@@ -5,6 +5,7 @@
 
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/progress.h"
 #include "lightpatch/cooker/scene.h"
 #include "lightpatch/cooker/texels.h"
 
@@ -15,9 +16,16 @@ class Tracer;
 // `tracer` (may be null in tests that need no push-out) is used to move samples out of solid.
 TexelSet build_texels(const Scene& scene, const Layout& layout, const Tracer* tracer);
 
-// Makes texels on both sides of a chart cut agree, then fills invalid texels from their nearest
-// valid neighbours (within the texel's region) so bilinear filtering shows no black seams.
+// Fills invalid texels from their nearest valid neighbours (within the texel's region) so
+// bilinear filtering shows no black seams, then makes texels on both sides of a chart cut agree.
+// A linear map with non-negative weights: a map of non-negative irradiance stays non-negative,
+// and finalizing each map of a recomposition equals finalizing the recomposed map.
 void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout,
                   const TexelSet& texels);
+
+// finalize_map() on every map the bake made: base, contributions, shadows, pair corrections and
+// static shadows (every map the pack recombines). `progress` (may be null) advances per map.
+void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
+                   const TexelSet& texels, Progress* progress = nullptr);
 
 }  // namespace lightpatch::cooker

@@ -30,6 +30,13 @@ struct TexelSet {
   };
   std::vector<Fill> fill;
   std::vector<uint32_t> fill_sources;
+  // Seam plan (build_texels() makes it from Layout::seams; finalize_map() applies it after the
+  // dilation): texels outside their chart next to a cut edge, each set to the weighted sum
+  // seam_weights[first, first+count) of texels seam_sources[...] (weights >= 0, summing to 1):
+  // the other chart's filtered value at the same point of the surface.
+  std::vector<Fill> seam;
+  std::vector<uint32_t> seam_sources;
+  std::vector<float> seam_weights;
   size_t index(int x, int y) const { return static_cast<size_t>(y) * width + x; }
 };
 

@@ -69,6 +69,13 @@ class Tracer {
       blocked[i] = occluded_static(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax) ? 1 : 0;
     }
   }
+  // Blocked by static geometry or any semi-dynamic object (every object present): a shadow ray
+  // of a state in which every object is visible, in one any-hit traversal.
+  virtual void occluded_many(const Ray* rays, int n, uint8_t* blocked) const {
+    for (int i = 0; i < n; ++i) {
+      blocked[i] = intersect(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax, true).hit;
+    }
+  }
   // Rays a batch query traces together (its packet width): batches of a multiple of it waste no
   // lanes.
   virtual int batch_width() const { return 1; }

@@ -1,0 +1,46 @@
+// Executes the planner's steps on the CPU: a double-precision RGB accumulator and a presented map,
+// either linear float RGB (the CPU reference recomposer) or half-float RGBA rounded to nearest
+// (the runtime's CPU path, uploaded as the texture the game samples). Presenting clamps at zero
+// and multiplies by the presentation scale (planner.h, runtime.h).
+//
+// The sink owns no memory: the caller sizes the buffers for the pack (width*height*3 doubles, and
+// width*height*3 floats or width*height*4 halves) and keeps them alive.
+#pragma once
+
+#include <cstdint>
+
+#include "lightpatch/pack_view.h"
+#include "lightpatch/planner.h"
+
+namespace lightpatch {
+
+class CpuSink final : public DrawSink {
+ public:
+  // Exactly one of `rgb` and `half_rgba` is non-null. `scale` multiplies presented values.
+  void bind(const PackView* pack, double* accumulator, float* rgb, uint16_t* half_rgba,
+            float scale);
+
+  void clear() override;
+  void draw(uint32_t group, uint32_t first_patch, uint32_t patch_count,
+            const float factor[3]) override;
+  void present(uint32_t first_patch, uint32_t patch_count) override;
+  void present_all() override;
+
+  // Rows [dirty_begin(), dirty_end()) of the presented map changed since the last
+  // clear_dirty() (empty when begin == end).
+  uint32_t dirty_begin() const { return dirty_begin_; }
+  uint32_t dirty_end() const { return dirty_end_; }
+  void clear_dirty();
+
+ private:
+  void present_rect(uint32_t x, uint32_t y, uint32_t width, uint32_t height);
+
+  const PackView* pack_ = nullptr;
+  double* accumulator_ = nullptr;
+  float* rgb_ = nullptr;
+  uint16_t* half_rgba_ = nullptr;
+  float scale_ = 1.0f;
+  uint32_t dirty_begin_ = 0, dirty_end_ = 0;
+};
+
+}  // namespace lightpatch

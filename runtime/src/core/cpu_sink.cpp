@@ -1,0 +1,70 @@
+#include "lightpatch/cpu_sink.h"
+
+#include <cstring>
+
+#include "lightpatch/half_float.h"
+#include "lightpatch/patch_accumulate.h"
+
+namespace lightpatch {
+
+void CpuSink::bind(const PackView* pack, double* accumulator, float* rgb, uint16_t* half_rgba,
+                   float scale) {
+  pack_ = pack;
+  accumulator_ = accumulator;
+  rgb_ = rgb;
+  half_rgba_ = half_rgba;
+  scale_ = scale;
+  clear_dirty();
+}
+
+void CpuSink::clear_dirty() {
+  dirty_begin_ = dirty_end_ = 0;
+}
+
+void CpuSink::clear() {
+  std::memset(accumulator_, 0,
+              sizeof(double) * 3 * pack_->lightmap_width() * size_t(pack_->lightmap_height()));
+}
+
+void CpuSink::draw(uint32_t, uint32_t first, uint32_t count, const float factor[3]) {
+  const double f[3] = {factor[0], factor[1], factor[2]};
+  add_patches(*pack_, first, count, f, accumulator_);
+}
+
+void CpuSink::present_rect(uint32_t x0, uint32_t y0, uint32_t width, uint32_t height) {
+  const uint32_t w = pack_->lightmap_width();
+  for (uint32_t y = y0; y < y0 + height; ++y) {
+    const double* src = accumulator_ + (size_t(y) * w + x0) * 3;
+    for (uint32_t x = 0; x < width; ++x) {
+      for (uint32_t c = 0; c < 3; ++c) {
+        const double v = src[x * 3 + c] > 0.0 ? src[x * 3 + c] * scale_ : 0.0;
+        if (rgb_) {
+          rgb_[(size_t(y) * w + x0 + x) * 3 + c] = float(v);
+        } else {
+          half_rgba_[(size_t(y) * w + x0 + x) * 4 + c] = float_to_half(float(v));
+        }
+      }
+      if (half_rgba_) half_rgba_[(size_t(y) * w + x0 + x) * 4 + 3] = 0x3C00u;  // alpha 1
+    }
+  }
+  if (dirty_begin_ == dirty_end_) {
+    dirty_begin_ = y0;
+    dirty_end_ = y0 + height;
+  } else {
+    if (y0 < dirty_begin_) dirty_begin_ = y0;
+    if (y0 + height > dirty_end_) dirty_end_ = y0 + height;
+  }
+}
+
+void CpuSink::present(uint32_t first, uint32_t count) {
+  for (uint32_t p = first; p < first + count; ++p) {
+    const pack::PatchRecord& pr = pack_->patch(p);
+    present_rect(pr.dest_x, pr.dest_y, pr.width, pr.height);
+  }
+}
+
+void CpuSink::present_all() {
+  present_rect(0, 0, pack_->lightmap_width(), pack_->lightmap_height());
+}
+
+}  // namespace lightpatch

@@ -1,0 +1,42 @@
+#include "cooked_pack.h"
+
+#include <gtest/gtest.h>
+
+#include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/pack_builder.h"
+#include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/report.h"
+#include "lightpatch/cooker/texel_builder.h"
+#include "lightpatch/cooker/unwrap.h"
+
+namespace lightpatch::testing {
+
+using namespace cooker;
+
+void cook_draft(CookedPack& c, float texels_per_unit) {
+  LayoutOptions lo;
+  lo.texels_per_unit = texels_per_unit;
+  c.layout = build_layout(c.scene, lo);
+  c.tracer = make_embree_tracer(c.scene);
+  c.texels = build_texels(c.scene, c.layout, c.tracer.get());
+  Progress progress(true);
+  Report report;
+  BakeOptions options;
+  options.quality = Quality::kDraft;
+  BakedMaps maps = bake_maps(c.scene, c.layout, c.texels, *c.tracer, options, progress, report);
+  finalize_maps(maps, c.scene, c.layout, c.texels);
+  c.bytes = build_pack(c.scene, c.layout, maps, PackOptions{}, report);
+  Error error;
+  ASSERT_EQ(PackView::open(c.bytes.data(), c.bytes.size(), &c.pack, &error), Status::kOk)
+      << error.message;
+}
+
+void open_recomposers(const PackView& pack, const RuntimeLimits& limits, Recomposers* r) {
+  char message[256] = {};
+  ASSERT_TRUE(r->context.create_headless(message, sizeof message)) << message;
+  Error error;
+  ASSERT_EQ(r->runtime.open(pack, limits, &error), Status::kOk) << error.message;
+  ASSERT_EQ(r->cpu.init(pack, &error), Status::kOk) << error.message;
+}
+
+}  // namespace lightpatch::testing
