@@ -213,19 +213,24 @@ float sphere_cosine_integral(float cos_theta, float sin2_sigma) {
 
 bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n, int samples,
                      uint64_t rng, float eps, float extent, float cutoff,
-                     std::vector<LightSample>& out) {
-  const glm::vec3 origin = p + n * eps;
+                     std::vector<LightSample>& out, const TexelFootprint* footprint,
+                     int positions) {
   const float eps2 = eps * eps;
+  // The receiver point of sample i: the texel's sample point, or a point of its surface patch.
+  const uint64_t spread = sample_hash(rng, 2, 0, 0);
+  auto receiver = [&](int i) { return footprint ? footprint_point(*footprint, p, i, spread) : p; };
+  const int points = footprint ? std::max(1, positions) : 1;
+  const float r = std::max(0.0f, light.radius);
   if (light.type == LightType::kDirectional) {
     const glm::vec3 dir = -light.direction;
     const float e = std::max(0.0f, glm::dot(n, dir));
     if (e <= 0.0f || e < cutoff) return false;
-    out.push_back({origin, dir, eps, extent, glm::vec3(e)});
+    for (int i = 0; i < points; ++i)
+      out.push_back({receiver(i) + n * eps, dir, eps, extent, glm::vec3(e / float(points))});
     return true;
   }
   const glm::vec3 to_light = light.position - p;
   const float d = glm::length(to_light);
-  const float r = std::max(0.0f, light.radius);
   // Early outs before any ray: whole light behind the surface, beyond range, too dim even at
   // its nearest point.
   if (glm::dot(to_light, n) <= -r) return false;
@@ -234,53 +239,62 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
   const float bound = range_window(light.range, nearest) / (nearest * nearest + eps2);
   if (bound < cutoff) return false;
   const Cone cone(light);
-  if (r <= 0.0f) {
-    const float e = irradiance_with_cone(light, cone, light.position, p, n, eps2);
-    if (e <= 0.0f || e < cutoff) return false;
-    const glm::vec3 to_l = light.position - origin;
-    const float dl = glm::length(to_l);
-    if (!(dl > 2.0f * eps)) return false;  // the light sits on the surface: no ray can reach it
-    out.push_back({origin, to_l / dl, eps, dl - eps, glm::vec3(e)});
-    return true;
-  }
-  SphereView view;
-  if (!view_sphere_light(light, p, &view)) return false;
-  if (samples <= 1) {
-    // The exact unshadowed irradiance, its visibility from one ray towards the centre.
-    const float cos_theta = d > 0.0f ? glm::dot(n, to_light / d) : 1.0f;
-    const float s2 = d > r ? (r / d) * (r / d) : 1.0f;
-    const float e =
-        d > r ? view.radiance * sphere_cosine_integral(cos_theta, s2) : view.radiance * kPi;
-    if (e <= 0.0f || e < cutoff) return false;
-    const glm::vec3 to_l = light.position - origin;
-    const float dl = glm::length(to_l);
-    // Inside the sphere nothing stands between the receiver and the light.
-    const float reach = std::max(eps, dl - r);
-    out.push_back({origin, dl > 0.0f ? to_l / dl : n, eps, reach, glm::vec3(e)});
-    return true;
-  }
-  // The visible cone (or, inside the sphere, the cosine-weighted hemisphere), stratified g x g
-  // and jittered per texel; each sample brings L cos(n, w) / pdf(w) / count.
-  const int g = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples))));
-  const int count = g * g;
-  const float per_sample = view.radiance / static_cast<float>(count);
   const size_t first = out.size();
   float total = 0.0f;
-  for (int i = 0; i < count; ++i) {
-    const uint64_t h = sample_hash(rng, 0, 0, static_cast<uint64_t>(i));
-    const float u = (static_cast<float>(i % g) + hash_to_unit(h)) / static_cast<float>(g);
-    const float v = (static_cast<float>(i / g) + hash_to_unit(splitmix(h))) / static_cast<float>(g);
-    float t_surface = 0.0f;
-    const glm::vec3 w = sample_sphere_view(view, n, u, v, &t_surface);
-    const float cos_w = glm::dot(n, w);
-    const float pdf = sphere_view_pdf(view, n, w);
-    if (!(cos_w > 0.0f) || !(pdf > 0.0f)) continue;
-    const float e = per_sample * cos_w / pdf;
-    const glm::vec3 to_s = p + w * t_surface - origin;
-    const float ds = glm::length(to_s);
-    // A surface point inside the sphere has nothing to trace.
-    out.push_back({origin, ds > 0.0f ? to_s / ds : w, eps, std::max(eps, ds - eps), glm::vec3(e)});
-    total += e;
+  if (r <= 0.0f || samples <= 1) {
+    // A point light, or a sphere with one sample: one ray per receiver point, towards the light's
+    // centre, carrying that point's exact unshadowed irradiance.
+    for (int i = 0; i < points; ++i) {
+      const glm::vec3 q = receiver(i), origin = q + n * eps;
+      float e = 0.0f;
+      const glm::vec3 to_q = light.position - q;
+      const float dq = glm::length(to_q);
+      if (r <= 0.0f) {
+        e = irradiance_with_cone(light, cone, light.position, q, n, eps2);
+      } else {
+        SphereView view;
+        if (!view_sphere_light(light, q, &view)) continue;
+        const float cos_theta = dq > 0.0f ? glm::dot(n, to_q / dq) : 1.0f;
+        const float s2 = dq > r ? (r / dq) * (r / dq) : 1.0f;
+        e = dq > r ? view.radiance * sphere_cosine_integral(cos_theta, s2) : view.radiance * kPi;
+      }
+      e /= float(points);
+      if (!(e > 0.0f)) continue;
+      const glm::vec3 to_l = light.position - origin;
+      const float dl = glm::length(to_l);
+      if (r <= 0.0f && !(dl > 2.0f * eps)) continue;  // a point light on the surface: no ray
+      // Inside a sphere nothing stands between the receiver and the light.
+      const float reach = r <= 0.0f ? dl - eps : std::max(eps, dl - r);
+      out.push_back({origin, dl > 0.0f ? to_l / dl : n, eps, reach, glm::vec3(e)});
+      total += e;
+    }
+  } else {
+    // The visible cone (or, inside the sphere, the cosine-weighted hemisphere), stratified g x g
+    // and jittered per texel; each sample brings L cos(n, w) / pdf(w) / count, from its own
+    // receiver point.
+    const int g = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples))));
+    const int count = g * g;
+    for (int i = 0; i < count; ++i) {
+      const glm::vec3 q = footprint ? receiver(i) : p, origin = q + n * eps;
+      SphereView view;
+      if (!view_sphere_light(light, q, &view)) continue;
+      const uint64_t h = sample_hash(rng, 0, 0, static_cast<uint64_t>(i));
+      const float u = (static_cast<float>(i % g) + hash_to_unit(h)) / static_cast<float>(g);
+      const float v =
+          (static_cast<float>(i / g) + hash_to_unit(splitmix(h))) / static_cast<float>(g);
+      float t_surface = 0.0f;
+      const glm::vec3 w = sample_sphere_view(view, n, u, v, &t_surface);
+      const float cos_w = glm::dot(n, w);
+      const float pdf = sphere_view_pdf(view, n, w);
+      if (!(cos_w > 0.0f) || !(pdf > 0.0f)) continue;
+      const float e = view.radiance / static_cast<float>(count) * cos_w / pdf;
+      const glm::vec3 to_s = q + w * t_surface - origin;
+      const float ds = glm::length(to_s);
+      // A surface point inside the sphere has nothing to trace.
+      out.push_back(
+          {origin, ds > 0.0f ? to_s / ds : w, eps, std::max(eps, ds - eps), glm::vec3(e)});
+      total += e;
+    }
   }
   if (total <= 0.0f || total < cutoff) {
     out.resize(first);
@@ -441,11 +455,13 @@ void EmissiveLights::cluster_cdf(const glm::vec3& x, float* cdf) const {
 }
 
 void EmissiveLights::sample(const glm::vec3& p, const glm::vec3& n, int samples, uint64_t rng,
-                            float eps, std::vector<LightSample>& out) const {
+                            float eps, std::vector<LightSample>& out,
+                            const TexelFootprint* footprint) const {
   if (tris_.empty() || samples <= 0) return;
-  const glm::vec3 origin = p + n * eps;
   const float inv_n = 1.0f / static_cast<float>(samples);
+  const uint64_t spread = sample_hash(rng, 2, 1, 0);
   for (int i = 0; i < samples; ++i) {
+    const glm::vec3 origin = (footprint ? footprint_point(*footprint, p, i, spread) : p) + n * eps;
     const uint64_t h = sample_hash(rng, 1, 0, static_cast<uint64_t>(i));
     const float u = (static_cast<float>(i) + hash_to_unit(h)) * inv_n;  // stratified in power
     const size_t k =

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lightpatch/cooker/scene.h"
+#include "texel_footprint.h"
 
 namespace lightpatch::cooker {
 
@@ -102,11 +103,15 @@ float hash_to_unit(uint64_t h);
 // A light with a radius is its sphere (SphereView): with one sample, the exact unshadowed
 // irradiance and one ray to the centre; with more, its visible cone stratified g x g, each ray
 // ending on the sphere's surface.
+// With a footprint (texel_footprint.h), every sample leaves its own point of the texel's surface
+// patch, and a light without a radius (or with one sample) gets `positions` samples, one per
+// point, each a share of the irradiance there: the texel's mean over its patch.
 // Returns false without appending when an early out fires: light behind the surface, beyond its
 // range, or unshadowed irradiance below `cutoff`. `extent` bounds directional shadow rays.
 bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n, int samples,
                      uint64_t rng, float eps, float extent, float cutoff,
-                     std::vector<LightSample>& out);
+                     std::vector<LightSample>& out, const TexelFootprint* footprint = nullptr,
+                     int positions = 1);
 
 // The emissive triangles of static meshes, as area lights (radiance L = Material::emissive).
 class EmissiveLights {
@@ -114,9 +119,10 @@ class EmissiveLights {
   explicit EmissiveLights(const Scene& scene);
   bool empty() const { return tris_.empty(); }
   size_t triangle_count() const { return tris_.size(); }
-  // Appends `samples` shadow samples (area-weighted by power, stratified) for the texel at p/n.
+  // Appends `samples` shadow samples (area-weighted by power, stratified) for the texel at p/n;
+  // with a footprint, each from its own point of the texel's surface patch.
   void sample(const glm::vec3& p, const glm::vec3& n, int samples, uint64_t rng, float eps,
-              std::vector<LightSample>& out) const;
+              std::vector<LightSample>& out, const TexelFootprint* footprint = nullptr) const;
 
   // For a path tracer. The emitters are grouped in clusters (the connected pieces of each
   // emitting mesh: a flame, a panel; beyond kMaxClusters, neighbouring pieces merged): a point is

@@ -24,6 +24,7 @@
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/error.h"
 #include "surface_albedo.h"
+#include "texel_footprint.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -78,12 +79,13 @@ struct PathState {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
-             const ResolvedState& state, uint64_t seed)
+             const ResolvedState& state, uint64_t seed, bool texel_patch)
       : scene_(scene),
         texels_(texels),
         tracer_(tracer),
         visible_(state.visible),
         emissive_(scene),
+        footprints_(texel_patch ? texel_footprints(texels) : std::vector<TexelFootprint>()),
         seed_(seed) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
       if (max3(state.radiant[i]) > 0.0f) lights_.push_back({&scene.lights[i], state.radiant[i]});
@@ -109,7 +111,9 @@ class PathTracer {
       if (!texels_.valid[t]) continue;
       for (int s = s0; s < s1; ++s) {
         PathState p;
-        p.position = texels_.position[t];
+        p.position = footprints_.empty() ? texels_.position[t]
+                                         : footprint_point(footprints_[t], texels_.position[t], s,
+                                                           sample_hash(seed_, t, 0x666f6f74ull, 0));
         p.normal = texels_.normal[t];
         p.throughput = glm::vec3(1.0f);
         p.value = static_cast<uint32_t>(active.size());
@@ -315,6 +319,9 @@ class PathTracer {
   const Tracer& tracer_;
   const std::vector<uint8_t>& visible_;
   EmissiveLights emissive_;
+  // A texel's irradiance is its mean over its surface patch, as the cook defines it: each path
+  // starts at its own point of the patch.
+  std::vector<TexelFootprint> footprints_;
   uint64_t seed_;
   std::vector<LitLight> lights_;
   std::vector<LitLight> spheres_;  // lit lights with a radius: MIS on the rays that cross them
@@ -399,7 +406,8 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t rays0 = tracer.rays_traced();
   const int threads = worker_count(options.threads);
-  const PathTracer tracer_of_paths(scene, texels, tracer, resolved, options.seed);
+  const PathTracer tracer_of_paths(scene, texels, tracer, resolved, options.seed,
+                                   options.texel_patch);
   const int w = texels.width, h = texels.height;
   Accumulator acc(texels.position.size());
   const int passes = (options.samples + kPassSamples - 1) / kPassSamples;

@@ -166,11 +166,15 @@ double percentile99(std::vector<float> v) {
   return v[k];
 }
 
-ReferenceStats reference_stats(const FloatImage& ref, const TexelSet& texels) {
+// Texels of meshes that cast no shadows (a light's own flame or bulb, which the light sits in) are
+// left out: what they receive from inside their light is no receiver's light map.
+ReferenceStats reference_stats(const FloatImage& ref, const TexelSet& texels, const Scene& scene) {
   ReferenceStats s;
   std::vector<float> lum, peak;
   for (size_t i = 0; i < texels.valid.size(); ++i) {
     if (!texels.valid[i]) continue;
+    const int mesh = texels.mesh.empty() ? -1 : texels.mesh[i];
+    if (mesh >= 0 && !scene.meshes[size_t(mesh)].cast_shadows) continue;
     const float* r = &ref.data[i * 3];
     s.valid.push_back(uint32_t(i));
     lum.push_back(luminance(r));
@@ -620,7 +624,8 @@ int verb_accuracy(Args& args) {
   pt_options.seed = o.seed + kReferenceSeedOffset;
   pt_options.threads = o.threads;
   Hasher hasher;
-  hasher.text(o.path_traced ? "lightpatch accuracy reference v2: path tracing"
+  // v3: a texel's value is its mean over its surface patch (texel_footprint.h).
+  hasher.text(o.path_traced ? "lightpatch accuracy reference v3: path tracing"
                             : "lightpatch accuracy reference v1");
   {
     const std::vector<uint8_t> file = read_file(o.scene_path);
@@ -729,7 +734,7 @@ int verb_accuracy(Args& args) {
   for (float v : reference.data) {
     if (!std::isfinite(v)) throw CookError("accuracy: the reference map has a non-finite texel");
   }
-  const ReferenceStats stats = reference_stats(reference, ref_layout.texels);
+  const ReferenceStats stats = reference_stats(reference, ref_layout.texels, scene);
   if (stats.valid.empty()) throw CookError("accuracy: the scene has no light-map texels");
   if (!(stats.peak > 0.0)) throw CookError("accuracy: the scene is unlit (the reference is black)");
   // The path-traced reference's own noise: as a relative RMSE (what it alone adds to every row's
@@ -857,7 +862,7 @@ int verb_accuracy(Args& args) {
     const int w = ref_layout.layout.width, h = ref_layout.layout.height;
     FloatImage float_ref(w, h, 3);
     float_ref.data = compose_authored_float(scene, source->maps, w, h);
-    const ReferenceStats fstats = reference_stats(float_ref, ref_layout.texels);
+    const ReferenceStats fstats = reference_stats(float_ref, ref_layout.texels, scene);
     progress.begin("runtime", 3);
     for (EncodingPolicy e :
          {EncodingPolicy::kAuto, EncodingPolicy::kLinear, EncodingPolicy::kSquare}) {
@@ -938,7 +943,8 @@ int verb_accuracy(Args& args) {
       "each row: bake_maps + finalize + build_pack (cook_s, rays), then the authored state "
       "recomposed from the pack on the CPU reference and compared with the reference over valid "
       "texels",
-      "rel_rmse = sqrt(sum (x-r)^2 / sum r^2) over RGB of valid texels",
+      "rel_rmse = sqrt(sum (x-r)^2 / sum r^2) over RGB of valid texels (here and below: "
+      "texels of meshes that cast no shadows, a light's own flame or bulb, left out)",
       "max_rel_error = max over texels that matter of max_c |x_c-r_c| / max_c r_c; texels that "
       "matter: reference luminance >= 1% of its 99th percentile",
       "psnr_db = 10 log10(peak^2 / MSE), peak = 99th percentile of the reference's max channel",

@@ -80,6 +80,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
     throw ArgsError("--indirect-level must be 1, 2, 4 or 8");
   o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
+  o.bake.texel_samples = args.int_option("--texel-samples", 0, 1, 256);
   o.bake.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.bake.threads = args.int_option("--threads", 0, 1, 1024);
   o.bake.plan_effects = !args.flag("--no-plan");
@@ -238,6 +239,7 @@ int verb_bake_state(Args& args) {
   if (reference) {
     ref.seed = o.bake.seed;
     ref.threads = o.bake.threads;
+    ref.texel_patch = o.bake.texel_samples != 1;
     ReferenceBake rb = cook_reference_state(p, state, ref, progress, report);
     progress.message("reference: " + std::to_string(rb.samples) + " samples, " +
                      std::to_string(rb.rays) + " rays, mean relative standard error " +

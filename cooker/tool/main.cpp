@@ -49,6 +49,10 @@ constexpr const char* kCookOptionsHelp =
     "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
     "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
     "  --area-samples N       samples per texel for lights with a radius and emissive surfaces\n"
+    "  --texel-samples N      points of each texel's surface patch that direct light is averaged\n"
+    "                         over (anti-aliased shadow edges); 1 = the texel's sample point\n"
+    "                         (preset: draft 1, preview 4, production 9; for bake-state\n"
+    "                         --integrator reference, 1 samples the point, otherwise the patch)\n"
     "  --seed N               random seed (same scene, options and seed: same maps)\n"
     "  --threads N            worker threads (default: all cores)\n"
     "  --report REPORT.json   write the cook's decisions, timings and measured errors\n"
@@ -203,8 +207,8 @@ const Verb kVerbs[] = {
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
-     "[--gather-rays N] [--indirect-level K] [--denoise N] [--area-samples N] [--output-step E] "
-     "[--seed N] [--threads N] [--quiet]",
+     "[--gather-rays N] [--indirect-level K] [--denoise N] [--area-samples N] [--texel-samples N] "
+     "[--output-step E] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,

@@ -168,8 +168,8 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
   const ToolRun cook = expect_success({"cook", "--help"});
   for (const char* option :
        {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect", "--area-samples",
-        "--seed", "--integrator", "--gather-rays", "--indirect-level", "--denoise", "--threads",
-        "--report", "--quiet", "--no-plan", "--measure-plan"}) {
+        "--texel-samples", "--seed", "--integrator", "--gather-rays", "--indirect-level",
+        "--denoise", "--threads", "--report", "--quiet", "--no-plan", "--measure-plan"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
   const ToolRun bake_state = expect_success({"bake-state", "--help"});

@@ -35,7 +35,8 @@ BakedMaps bake(const Scene& scene, const TexelSet& texels, int area_samples = 0)
   Report report;
   BakeOptions o;
   o.area_samples = area_samples;
-  o.indirect = false;  // the analytic checks here are of direct light
+  o.indirect = false;   // the analytic checks here are of direct light
+  o.texel_samples = 1;  // ... at the texels' sample points
   return bake_maps(scene, test::bare_layout(texels.width, texels.height), texels, *tracer, o,
                    progress, report);
 }
@@ -328,6 +329,56 @@ TEST(DirectLight, SphereLightSamplerMatchesClosedForms) {
       EXPECT_NEAR(got, want, (samples == 1 ? 1e-4 : 3e-3) * want);
     }
   }
+}
+
+// A rod 0.4 texels wide lies across the floor's texel grid at 30 degrees under a directional light
+// from straight above: its shadow is a band thinner than a texel. Sampled at texel centres it is a
+// dotted line (each texel all dark or all lit); averaged over each texel's patch it is a grey band
+// whose darkening adds up to the band's area, with no texel fully dark.
+TEST(DirectLight, ThinShadowIsAGreyBandNotDots) {
+  constexpr int kN = 64;
+  constexpr float kHalf = 2.0f;
+  const float texel = 2.0f * kHalf / float(kN);
+  const float width = 0.4f * texel;
+  Scene scene = floor_scene();
+  // The rod: a thin box 0.5 m above the floor, along (cos 30, 0, sin 30), 3 m long.
+  const glm::vec3 along = glm::normalize(glm::vec3(std::cos(0.5236f), 0.0f, std::sin(0.5236f)));
+  const glm::vec3 across = glm::cross(glm::vec3(0, 1, 0), along);
+  const glm::vec3 c(0.0f, 0.5f, 0.0f);
+  const glm::vec3 a = along * 1.5f, b = across * (0.5f * width), up(0.0f, 0.01f, 0.0f);
+  // Two quads (top and bottom) make the thin occluder; occluders are double-sided.
+  test::add_quad(scene, c - a - b + up, c - a + b + up, c + a + b + up, c + a - b + up, "rod_top");
+  test::add_quad(scene, c - a - b, c + a - b, c + a + b, c - a + b, "rod_bottom");
+  test::finish(scene);
+  scene.lights = {test::directional_light("sun", {0, -1, 0}, 1.0f)};
+  const TexelSet texels = floor_texels(kN, kHalf);
+  auto darkening = [&](int texel_samples) {
+    auto tracer = make_embree_tracer(scene);
+    Progress progress(true);
+    Report report;
+    BakeOptions o;
+    o.indirect = false;
+    o.texel_samples = texel_samples;
+    const BakedMaps maps =
+        bake_maps(scene, test::bare_layout(kN, kN), texels, *tracer, o, progress, report);
+    double sum = 0.0, darkest = 0.0;
+    for (int y = 2; y < kN - 2; ++y)  // away from the rod's ends and the floor's edges
+      for (int x = 2; x < kN - 2; ++x) {
+        const double d = 1.0 - double(maps.base.at(x, y, 0));
+        sum += d;
+        darkest = std::max(darkest, d);
+      }
+    return std::pair<double, double>(sum, darkest);
+  };
+  // The band's area in texels: its width times the rod's length (3 m, all inside the interior).
+  const double band = 0.4 * 3.0 / double(texel);
+  const auto [point_sum, point_darkest] = darkening(1);
+  const auto [patch_sum, patch_darkest] = darkening(16);
+  std::printf("band %.1f texels: point samples %.1f (darkest %.2f), patch %.1f (darkest %.2f)\n",
+              band, point_sum, point_darkest, patch_sum, patch_darkest);
+  EXPECT_DOUBLE_EQ(point_darkest, 1.0);  // the dots
+  EXPECT_LT(patch_darkest, 0.75);        // no texel fully dark
+  EXPECT_NEAR(patch_sum / band, 1.0, 0.08);
 }
 
 }  // namespace

@@ -30,6 +30,7 @@ ReferenceBake trace(const Scene& scene, const TexelSet& texels, int samples, uin
   o.samples = samples;
   o.seed = seed;
   o.threads = threads;
+  o.texel_patch = false;  // the closed forms here are of points
   return bake_reference(scene, texels, *tracer, state, o, progress, report);
 }
 

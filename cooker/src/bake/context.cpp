@@ -15,6 +15,18 @@ namespace {
 // light to expose for.
 constexpr float kMinOutputStep = 1e-6f;
 
+int preset_texel_samples(Quality q) {
+  switch (q) {
+    case Quality::kDraft:
+      return 1;
+    case Quality::kPreview:
+      return 4;
+    case Quality::kProduction:
+      return 9;
+  }
+  return 4;
+}
+
 int preset_samples(Quality q) {
   switch (q) {
     case Quality::kDraft:
@@ -149,6 +161,8 @@ BakeContext::BakeContext(const Scene& s, const Layout& l, const TexelSet& t, con
   check_bake_inputs(scene, texels);
   threads = worker_count(o.threads);
   area_samples = o.area_samples > 0 ? o.area_samples : preset_samples(o.quality);
+  texel_samples = o.texel_samples > 0 ? o.texel_samples : preset_texel_samples(o.quality);
+  if (texel_samples > 1) footprints = texel_footprints(texels);
   eps = tracer.epsilon();
   const float scale = scene.scale() > 0.0f ? scene.scale() : 1.0f;
   extent = 1.5f * scale;  // any segment inside the bounds is shorter than the diagonal
@@ -198,11 +212,13 @@ uint64_t BakeContext::texel_rng(size_t texel, int slot) const {
 void BakeContext::light_samples(int li, size_t t, std::vector<LightSample>& out) const {
   const LightPlan& p = lights[static_cast<size_t>(li)];
   sample_punctual(scene.lights[static_cast<size_t>(li)], texels.position[t], texels.normal[t],
-                  p.samples, texel_rng(t, li + 1), eps, extent, p.cutoff, out);
+                  p.samples, texel_rng(t, li + 1), eps, extent, p.cutoff, out, footprint(t),
+                  texel_samples);
 }
 
 void BakeContext::emissive_samples(size_t t, std::vector<LightSample>& out) const {
-  emissive.sample(texels.position[t], texels.normal[t], area_samples, texel_rng(t, 0), eps, out);
+  emissive.sample(texels.position[t], texels.normal[t], area_samples, texel_rng(t, 0), eps, out,
+                  footprint(t));
 }
 
 std::string BakeContext::light_name(int li) const {

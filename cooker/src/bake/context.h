@@ -17,6 +17,7 @@
 #include "lightpatch/cooker/scene.h"
 #include "lightpatch/cooker/texels.h"
 #include "lightpatch/cooker/tracer.h"
+#include "texel_footprint.h"
 
 namespace lightpatch::cooker {
 
@@ -41,6 +42,11 @@ struct BakeContext {
   BakeOptions options;
   int threads = 1;
   int area_samples = 16;
+  int texel_samples = 1;                   // receiver points per texel for lights without a radius
+  std::vector<TexelFootprint> footprints;  // parallel to the texels; empty at 1 texel sample
+  const TexelFootprint* footprint(size_t t) const {
+    return footprints.empty() ? nullptr : &footprints[t];
+  }
   float eps = 0.0f;     // the tracer's self-intersection offset
   float extent = 0.0f;  // longer than any segment inside the scene's bounds
   // Irradiance of one 8-bit step of the final map at the authored exposure (BakedMaps).

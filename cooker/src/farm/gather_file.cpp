@@ -16,7 +16,7 @@ static_assert(std::endian::native == std::endian::little, "the format is little-
 // (and the version bumped), or a loaded operator would lack it.
 // (Sizes on 64-bit libstdc++: 3 ints and 12 vectors; the grid and 19 more fields.)
 static_assert(sizeof(CoarseGrid) == 304, "CoarseGrid changed: update gather_file.cpp");
-static_assert(sizeof(GatherOperator) == 592, "GatherOperator changed: update gather_file.cpp");
+static_assert(sizeof(GatherOperator) == 624, "GatherOperator changed: update gather_file.cpp");
 
 namespace {
 
@@ -24,11 +24,12 @@ constexpr char kMagic[8] = {'L', 'P', 'G', 'A', 'T', 'H', 'E', 'R'};
 constexpr uint32_t kVersion = 1;
 
 struct GatherScalars {
-  int32_t level, width, height, rays, rays_after_first, tiles_x, tiles_y;
+  int32_t level, width, height, rays, tiles_x, tiles_y;
+  int32_t level_rays[GatherOperator::kLevels];
   float mean_albedo;
   uint64_t buried_texels, rays_traced;
 };
-static_assert(sizeof(GatherScalars) == 48);
+static_assert(GatherOperator::kLevels == 3 && sizeof(GatherScalars) == 56);
 
 class Writer {
  public:
@@ -177,7 +178,7 @@ std::vector<uint8_t> encode_gather(const GatherOperator& op, const std::array<ui
   s.width = g.width;
   s.height = g.height;
   s.rays = op.rays;
-  s.rays_after_first = op.rays_after_first;
+  for (int l = 0; l < GatherOperator::kLevels; ++l) s.level_rays[l] = op.level_rays[l];
   s.tiles_x = op.tiles_x;
   s.tiles_y = op.tiles_y;
   s.mean_albedo = op.mean_albedo;
@@ -197,8 +198,7 @@ std::vector<uint8_t> encode_gather(const GatherOperator& op, const std::array<ui
   w.array(g.links);
   w.array(g.alive);
   w.packed(op.hit, uint32_t(g.size()));
-  w.array(op.weight);
-  w.array(op.weight_after_first);
+  for (const std::vector<float>& weight : op.weight) w.array(weight);
   w.array(op.crossing_offset);
   w.array(op.crossings);
   w.array(op.crossing_hits);
@@ -258,17 +258,19 @@ GatherOperator decode_gather(const uint8_t* data, size_t size, const GatherFileE
   Reader in(data, size, sizeof h);
   GatherScalars s;
   std::memcpy(&s, in.need(sizeof s, "scalars"), sizeof s);
-  if (s.level != e.level || s.rays != e.rays || s.width <= 0 || s.height <= 0 ||
-      s.rays_after_first < 0 || s.rays_after_first > s.rays || s.tiles_x <= 0 || s.tiles_y <= 0 ||
-      !std::isfinite(s.mean_albedo))
+  if (s.level != e.level || s.rays != e.rays || s.width <= 0 || s.height <= 0 || s.tiles_x <= 0 ||
+      s.tiles_y <= 0 || !std::isfinite(s.mean_albedo))
     throw CookError("gather file: bad scalars");
+  for (int l = 0; l < GatherOperator::kLevels; ++l)
+    if (s.level_rays[l] < 0 || s.level_rays[l] > s.rays)
+      throw CookError("gather file: bad rays of a bounce level");
   GatherOperator op;
   CoarseGrid& g = op.grid;
   g.level = s.level;
   g.width = s.width;
   g.height = s.height;
   op.rays = s.rays;
-  op.rays_after_first = s.rays_after_first;
+  for (int l = 0; l < GatherOperator::kLevels; ++l) op.level_rays[l] = s.level_rays[l];
   op.tiles_x = s.tiles_x;
   op.tiles_y = s.tiles_y;
   op.mean_albedo = s.mean_albedo;
@@ -302,10 +304,10 @@ GatherOperator decode_gather(const uint8_t* data, size_t size, const GatherFileE
     if (a > 1) throw CookError("gather file: bad value in alive");
 
   op.hit = in.packed("hit", nc * uint64_t(s.rays), uint32_t(nc));
-  op.weight = in.array<float>("weight", nc);
-  op.weight_after_first = in.array<float>("weight_after_first", nc);
-  check_finite(op.weight, "weight");
-  check_finite(op.weight_after_first, "weight_after_first");
+  for (std::vector<float>& weight : op.weight) {
+    weight = in.array<float>("weight", nc);
+    check_finite(weight, "weight");
+  }
   op.crossing_offset = in.array<uint32_t>("crossing_offset", nc + 1);
   op.crossings = in.array<Crossing>("crossings");
   op.crossing_hits = in.array<CrossingHit>("crossing_hits");

@@ -1,9 +1,11 @@
 #include "farm/group_inputs.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "direct_light.h"
+#include "texel_footprint.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -34,7 +36,10 @@ struct TexelBuckets {
   std::vector<glm::vec3> lo, hi;  // lo.x > hi.x: no valid texel
 };
 
-TexelBuckets texel_buckets(const TexelSet& t, size_t regions, int threads) {
+// `foot`: the texels' footprints (empty: sample points only), whose receiver points spread up to
+// a texel around each sample point: part of the digest, and of the bounds.
+TexelBuckets texel_buckets(const TexelSet& t, const std::vector<TexelFootprint>& foot,
+                           size_t regions, int threads) {
   std::vector<std::vector<uint32_t>> members(regions + 1);
   for (size_t i = 0; i < t.position.size(); ++i) {
     const int32_t r = i < t.region.size() ? t.region[i] : -1;
@@ -69,9 +74,21 @@ TexelBuckets texel_buckets(const TexelSet& t, size_t regions, int threads) {
       h.value(rec.albedo);
       h.value(rec.mesh);
       h.value(rec.valid);
+      float spread = 0.0f;
+      if (i < foot.size()) {
+        const TexelFootprint& f = foot[i];
+        h.value(f.u);
+        h.value(f.v);
+        h.value(f.a0);
+        h.value(f.a1);
+        h.value(f.b0);
+        h.value(f.b1);
+        spread = glm::length(f.u) * std::max(std::abs(f.a0), std::abs(f.a1)) +
+                 glm::length(f.v) * std::max(std::abs(f.b0), std::abs(f.b1));
+      }
       if (t.valid[i]) {
-        b.lo[size_t(r)] = glm::min(b.lo[size_t(r)], t.position[i]);
-        b.hi[size_t(r)] = glm::max(b.hi[size_t(r)], t.position[i]);
+        b.lo[size_t(r)] = glm::min(b.lo[size_t(r)], t.position[i] - glm::vec3(spread));
+        b.hi[size_t(r)] = glm::max(b.hi[size_t(r)], t.position[i] + glm::vec3(spread));
       }
     }
     b.digest[size_t(r)] = h.finish();
@@ -152,7 +169,7 @@ JobDigests job_input_digests(const PreparedScene& p, const BakeContext& b, const
       if (m >= 0 && size_t(m) < meshes.size()) h.digest(meshes[size_t(m)]);
     objects[o] = h.finish();
   }
-  const TexelBuckets tb = texel_buckets(p.texels, p.layout.regions.size(), b.threads);
+  const TexelBuckets tb = texel_buckets(p.texels, b.footprints, p.layout.regions.size(), b.threads);
   ContentHash common;
   common.text("lightpatch cook job");
   common.value(kJobInputsVersion);
@@ -161,6 +178,7 @@ JobDigests job_input_digests(const PreparedScene& p, const BakeContext& b, const
   const GatherPreset gp = gather_preset(o);
   common.value(o.quality);
   common.value(b.area_samples);
+  common.value(b.texel_samples);
   common.value(o.seed);
   common.value(o.indirect);
   common.value(o.integrator);

@@ -60,6 +60,11 @@ JobHash hash_of(const std::string& name) {
   return h;
 }
 
+// Every option is stored (threads aside): an option added to these structs must be added here and
+// to settings_from_json, or a job would run with its default. (Sizes on 64-bit Linux.)
+static_assert(sizeof(LayoutOptions) == 20, "LayoutOptions changed: update job_dir.cpp");
+static_assert(sizeof(BakeOptions) == 56, "BakeOptions changed: update job_dir.cpp");
+
 json settings_json(const CookSettings& s) {
   const BakeOptions& b = s.bake;
   return {{"scene", s.scene_path},
@@ -72,6 +77,7 @@ json settings_json(const CookSettings& s) {
                                                              : "auto"},
           {"quality", quality_name(b.quality)},
           {"area_samples", b.area_samples},
+          {"texel_samples", b.texel_samples},
           {"seed", b.seed},
           {"indirect", b.indirect},
           {"integrator", integrator_name(b.integrator)},
@@ -121,6 +127,7 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
     throw CookError(file + ": \"unwrap\" is not auto, always or never");
   s.bake.quality = parse_quality(field<std::string>(j, "quality", file));
   s.bake.area_samples = int_field(j, "area_samples", 0, 65536, file);
+  s.bake.texel_samples = int_field(j, "texel_samples", 0, 256, file);
   s.bake.seed = field<uint64_t>(j, "seed", file);
   s.bake.indirect = field<bool>(j, "indirect", file);
   s.bake.integrator = parse_integrator(field<std::string>(j, "integrator", file));

@@ -26,8 +26,8 @@ constexpr int kMaxCrossed = 8;
 constexpr float kBuriedFraction = 0.1f;
 // Marks a ray's hit on the back of a surface while the rays are traced.
 constexpr uint32_t kBackFace = 0xFFFFFFFEu;
-// The fewest rays a coarse texel gathers with after the first bounce.
-constexpr int kMinRaysAfterFirst = 16;
+// The fewest rays a coarse texel gathers with in the series' later bounces.
+constexpr int kMinLevelRays = 16;
 
 // Union-find over fine texels: charts are the connected valid texels of one region.
 struct Charts {
@@ -421,9 +421,11 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       }
     return best == kNoTexel ? kNoTexel : g.coarse_of[best];
   };
-  op.weight.assign(nc, 0.0f);
-  op.rays_after_first = std::min(n_rays, std::max(kMinRaysAfterFirst, n_rays / 4));
-  op.weight_after_first.assign(nc, 0.0f);
+  for (int l = 0; l < GatherOperator::kLevels; ++l) {
+    op.level_rays[l] =
+        l == 0 ? n_rays : std::min(n_rays, std::max(kMinLevelRays, n_rays >> (2 * l)));
+    op.weight[l].assign(nc, 0.0f);
+  }
   op.grid.alive.assign(nc, 0);
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
@@ -431,15 +433,16 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     size_t next = 0;
     for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
-      uint32_t used = 0, used_prefix = 0;
+      uint32_t used[GatherOperator::kLevels] = {0, 0, 0};
       uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
       for (int k = 0; k < n_rays; ++k) {
         const bool drop = buried[g.members[m0 + uint32_t(k) % mc]] != 0;
         hits[k] = drop ? kNoTexel : resolve(hits[k]);
-        used += drop ? 0 : 1;
-        if (k < op.rays_after_first) used_prefix += drop ? 0 : 1;
+        for (int l = 0; l < GatherOperator::kLevels; ++l)
+          if (k < op.level_rays[l] && !drop) ++used[l];
       }
-      op.weight_after_first[c] = used_prefix > 0 ? 1.0f / float(used_prefix) : 0.0f;
+      for (int l = 0; l < GatherOperator::kLevels; ++l)
+        op.weight[l][c] = used[l] > 0 ? 1.0f / float(used[l]) : 0.0f;
       const uint32_t count = row_counts[size_t(by)][c - row_first[size_t(by)]];
       for (size_t i = next; i < next + count; ++i) {
         const bool drop = buried[g.members[m0 + cr[i].ray % mc]] != 0;
@@ -447,8 +450,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
           ch[j].coarse = drop ? kNoTexel : resolve(ch[j].coarse);
       }
       next += count;
-      op.weight[c] = used > 0 ? 1.0f / float(used) : 0.0f;
-      op.grid.alive[c] = used > 0 ? 1 : 0;
+      op.grid.alive[c] = used[0] > 0 ? 1 : 0;
     }
   });
   for (uint8_t v : buried) op.buried_texels += v;

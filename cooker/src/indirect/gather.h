@@ -94,13 +94,15 @@ struct GatherOperator {
   // Static hit of every ray (objects absent) as a coarse texel, kNoTexel for a miss or the back
   // of a surface: rays * grid.size() entries, coarse texel c's rays at [c * rays, (c+1) * rays).
   std::vector<uint32_t> hit;
-  // 1 / the rays each coarse texel keeps (those of buried members are dropped); 0 if none.
-  std::vector<float> weight;
-  // Bounces after the first read only each texel's first `rays_after_first` rays (a prefix of a
-  // low-discrepancy sequence, as well spread as the whole): their light is smoother and dimmer,
-  // and this is where most of a solve's reads go. weight_after_first as `weight` for the prefix.
-  int rays_after_first = 0;
-  std::vector<float> weight_after_first;
+  // The series reads fewer rays as its light grows smoother and dimmer: the first bounce every
+  // ray, the second the first quarter, every later one the first sixteenth (prefixes of a
+  // low-discrepancy sequence, as well spread as the whole; at least kMinLevelRays). weight[L][c]:
+  // 1 / the rays of level L that coarse texel c keeps (a buried member's are dropped), 0 if none.
+  static constexpr int kLevels = 3;
+  int level_rays[kLevels] = {0, 0, 0};
+  std::vector<float> weight[kLevels];
+  // The level of the series' b-th bounce (0-based).
+  static int level_of(int bounce) { return bounce < kLevels ? bounce : kLevels - 1; }
   size_t buried_texels = 0;
   // Mean albedo (largest channel) over the texels that gather, at most 0.995: how slowly the
   // bounce series converges.

@@ -56,10 +56,11 @@ class GatherIntegrator final : public IndirectIntegrator {
     GroupBounce g;
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
     SolveStats st;
-    g.indirect = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st);
+    const Bounces bounces = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st);
     count(st, groups_);
-    g.direct_radiance = source;
-    g.bounce_radiance = bounce_radiance(op_, g.indirect);
+    g.indirect = bounces.total();
+    EmptyRadiance e = empty_radiance(op_, source, bounces);
+    g.sends = {std::move(e.direct), std::move(e.first), std::move(e.later)};
     g.peak = peak(g.indirect);
     g.bounces = st.bounces;
     return g;
@@ -72,14 +73,13 @@ class GatherIntegrator final : public IndirectIntegrator {
             ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
             : coarse_source_of(op_, b_.texels, [&](size_t t) { return blocked.at(t); });
     SolveStats st;
-    BounceMap change = solve_change(op_, present, {group.direct_radiance, group.bounce_radiance},
-                                    src, options(threshold, 1), &st);
+    BounceMap change = solve_change(op_, present, empty(group), src, options(threshold, 1), &st);
     count(st, changes_);
     return change;
   }
 
   float first_change(const GroupBounce& group, const std::vector<uint8_t>& present) const override {
-    return first_change_peak(op_, present, {group.direct_radiance, group.bounce_radiance});
+    return first_change_peak(op_, present, empty(group));
   }
 
   void add(BounceMap map, FloatImage& fine) const override {
@@ -91,26 +91,29 @@ class GatherIntegrator final : public IndirectIntegrator {
                  FloatImage& fine) const override {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
     SolveStats st;
-    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st), fine);
+    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st).total(), fine);
     count(st, states_);
   }
 
   nlohmann::json describe() const override {
-    return {{"integrator", "gather"},
-            {"level", preset_.level},
-            {"rays_per_coarse_texel", preset_.rays},
-            {"rays_after_first_bounce", op_.rays_after_first},
-            {"denoise_passes", preset_.denoise},
-            {"coarse_texels", op_.grid.size()},
-            {"buried_texels", op_.buried_texels},
-            {"gather_rays", op_.rays_traced},
-            {"crossings", op_.crossings.size()},
-            {"mean_albedo", op_.mean_albedo},
-            {"solves",
-             {{"groups", groups_.json()}, {"changes", changes_.json()}, {"states", states_.json()}}}};
+    return {
+        {"integrator", "gather"},
+        {"level", preset_.level},
+        {"rays_per_coarse_texel", preset_.rays},
+        {"rays_per_bounce", {op_.level_rays[0], op_.level_rays[1], op_.level_rays[2]}},
+        {"denoise_passes", preset_.denoise},
+        {"coarse_texels", op_.grid.size()},
+        {"buried_texels", op_.buried_texels},
+        {"gather_rays", op_.rays_traced},
+        {"crossings", op_.crossings.size()},
+        {"mean_albedo", op_.mean_albedo},
+        {"solves",
+         {{"groups", groups_.json()}, {"changes", changes_.json()}, {"states", states_.json()}}}};
   }
 
  private:
+  static EmptyRadiance empty(const GroupBounce& g) { return {g.sends[0], g.sends[1], g.sends[2]}; }
+
   SolveOptions options(float threshold, int threads) const {
     SolveOptions so;
     so.tolerance = kBounceTolerance * threshold * (1.0f - op_.mean_albedo);

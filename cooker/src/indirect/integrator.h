@@ -28,9 +28,10 @@ using BounceMap = std::vector<glm::vec3>;
 // One group's bounce light with no object present, and what its changes start from.
 struct GroupBounce {
   BounceMap indirect;
-  BounceMap direct_radiance;  // what the group's surfaces send on: their direct light
-  BounceMap bounce_radiance;  // ... and their bounce light
-  float peak = 0.0f;          // largest irradiance of `indirect`
+  // What the integrator keeps for the changes (final gathering: what the group's surfaces send
+  // on, by the series term that reads it).
+  std::vector<BounceMap> sends;
+  float peak = 0.0f;  // largest irradiance of `indirect`
   int bounces = 0;
 };
 

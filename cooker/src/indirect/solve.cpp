@@ -58,15 +58,14 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
   return out;
 }
 
-// out[c] = mean over c's rays of src at what the ray hits with `present` objects in place, for
-// every receiver c (others untouched: the caller zeroes `out`). `later`: a bounce after the
-// first, which reads only the first rays_after_first rays.
+// out[c] = mean over the first rays of `level` of c's rays of src at what each ray hits with
+// `present` objects in place, for every receiver c (others untouched: the caller zeroes `out`).
 void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
                  const CoarseMap& src, const std::vector<uint32_t>& receivers, int threads,
-                 bool later, CoarseMap& out) {
+                 int level, CoarseMap& out) {
   const bool objects = !present.empty();
-  const int n = later ? op.rays_after_first : op.rays;
-  const std::vector<float>& weight = later ? op.weight_after_first : op.weight;
+  const int n = op.level_rays[level];
+  const std::vector<float>& weight = op.weight[level];
   const int items = int((receivers.size() + kChunk - 1) / kChunk);
   parallel_for(items, threads, [&](int item) {
     const size_t end = std::min(receivers.size(), size_t(item + 1) * kChunk);
@@ -102,40 +101,68 @@ bool prune(CoarseMap& delta, float tolerance) {
   return any;
 }
 
-// For receiver c, what its rays that now end on a present object no longer see (the static hit's
-// radiance) against what they see instead, as the series' first bounce and its later bounces
-// read them: the direct radiance through every ray, the bounce radiance through the prefix of
-// rays the later bounces use (so the change equals I(none) - I(present) of the same series).
+// For receiver c and the series term of `level`: what c's rays of that level that now end on a
+// present object no longer see (the static hit's `radiance`) against what they see instead.
 glm::vec3 crossing_change(const GatherOperator& op, const std::vector<uint8_t>& present,
-                          const EmptyRadiance& empty, uint32_t c) {
-  glm::vec3 first(0.0f), later(0.0f);
+                          const CoarseMap& radiance, int level, uint32_t c) {
+  glm::vec3 sum(0.0f);
   for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
     const Crossing& rec = op.crossings[r];
+    if (int(rec.ray) >= op.level_rays[level]) break;
     uint32_t oc = kNoTexel;
     if (!present_hit(op, rec, present, &oc)) continue;
-    const uint32_t h = op.hit[size_t(c) * size_t(op.rays) + rec.ray];
-    first += at(empty.direct, h) - at(empty.direct, oc);
-    if (int(rec.ray) < op.rays_after_first) later += at(empty.bounce, h) - at(empty.bounce, oc);
+    sum += at(radiance, op.hit[size_t(c) * size_t(op.rays) + rec.ray]) - at(radiance, oc);
   }
-  return first * op.weight[c] + later * op.weight_after_first[c];
+  return sum * op.weight[level][c];
 }
 
-// Continues a Neumann series whose first term is `delta`: adds every bounce to `sum`.
-void bounce_on(const GatherOperator& op, const std::vector<uint8_t>& present, CoarseMap delta,
-               const SolveOptions& options, SolveStats* stats, CoarseMap& sum) {
+// The receivers with a ray that now ends on a present object.
+std::vector<uint32_t> crossing_receivers(const GatherOperator& op,
+                                         const std::vector<uint8_t>& present) {
+  std::vector<uint32_t> crossing;
+  for (size_t o = 0; o < present.size(); ++o) {
+    if (!present[o]) continue;
+    crossing.insert(crossing.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
+  }
+  std::sort(crossing.begin(), crossing.end());
+  crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+  return crossing;
+}
+
+// Runs a Neumann series: bounce b gathers albedo * term b-1 through the rays of its level, plus
+// `extra[b]` (a change's crossing terms) where given. Returns its terms: the first, the second and
+// the rest summed.
+Bounces run_series(const GatherOperator& op, const std::vector<uint8_t>& present, CoarseMap first,
+                   const CoarseMap* extra_second, const CoarseMap* extra_rest,
+                   const SolveOptions& options, SolveStats* stats) {
   const CoarseGrid& g = op.grid;
-  const std::vector<uint32_t> none;
-  for (int b = 0;; ++b) {
-    for (size_t c = 0; c < sum.size(); ++c) sum[c] += delta[c];
+  const size_t nc = first.size();
+  Bounces out;
+  out.second.assign(nc, glm::vec3(0.0f));
+  out.rest.assign(nc, glm::vec3(0.0f));
+  CoarseMap delta = first;
+  out.first = std::move(first);
+  if (stats) stats->bounces = 1;
+  for (int b = 1; b < options.max_bounces; ++b) {
+    const CoarseMap* extra = b == 1 ? extra_second : b == 2 ? extra_rest : nullptr;
+    const bool any = prune(delta, options.tolerance);
+    if (!any && !extra) break;
+    for (size_t c = 0; c < nc; ++c) delta[c] *= g.albedo[c];
+    CoarseMap next(nc, glm::vec3(0.0f));
+    if (any) {
+      const std::vector<uint32_t> receivers = receivers_of(op, delta, {});
+      const int level = GatherOperator::level_of(b);
+      gather_into(op, present, delta, receivers, options.threads, level, next);
+      if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.level_rays[level]);
+    }
+    if (extra)
+      for (size_t c = 0; c < nc; ++c) next[c] += (*extra)[c];
+    CoarseMap& sum = b == 1 ? out.second : out.rest;
+    for (size_t c = 0; c < nc; ++c) sum[c] += next[c];
     if (stats) stats->bounces = b + 1;
-    if (b + 1 >= options.max_bounces || !prune(delta, options.tolerance)) break;
-    for (size_t c = 0; c < delta.size(); ++c) delta[c] *= g.albedo[c];
-    const std::vector<uint32_t> receivers = receivers_of(op, delta, none);
-    CoarseMap next(delta.size(), glm::vec3(0.0f));
-    gather_into(op, present, delta, receivers, options.threads, true, next);
-    if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays_after_first);
     delta.swap(next);
   }
+  return out;
 }
 
 }  // namespace
@@ -148,60 +175,67 @@ CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const 
   });
 }
 
-CoarseMap solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
-                         const CoarseMap& source, const SolveOptions& options, SolveStats* stats) {
-  CoarseMap sum(source.size(), glm::vec3(0.0f));
-  const std::vector<uint32_t> none;
-  const std::vector<uint32_t> receivers = receivers_of(op, source, none);
+CoarseMap Bounces::total() const {
+  CoarseMap out(first.size());
+  for (size_t c = 0; c < out.size(); ++c) out[c] = first[c] + second[c] + rest[c];
+  return out;
+}
+
+Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
+                       const CoarseMap& source, const SolveOptions& options, SolveStats* stats) {
+  const std::vector<uint32_t> receivers = receivers_of(op, source, {});
   CoarseMap first(source.size(), glm::vec3(0.0f));
-  gather_into(op, present, source, receivers, options.threads, false, first);
+  gather_into(op, present, source, receivers, options.threads, 0, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  bounce_on(op, present, std::move(first), options, stats, sum);
-  return sum;
+  return run_series(op, present, std::move(first), nullptr, nullptr, options, stats);
+}
+
+EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
+                             const Bounces& bounces) {
+  EmptyRadiance e;
+  e.direct = source;
+  e.first.resize(source.size());
+  e.later.resize(source.size());
+  for (size_t c = 0; c < source.size(); ++c) {
+    e.first[c] = op.grid.albedo[c] * bounces.first[c];
+    e.later[c] = op.grid.albedo[c] * (bounces.second[c] + bounces.rest[c]);
+  }
+  return e;
 }
 
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const EmptyRadiance& empty, const CoarseMap& direct_change,
                        const SolveOptions& options, SolveStats* stats) {
   const size_t nc = op.grid.size();
-  // Receivers with a ray that now ends on a present object.
-  std::vector<uint32_t> crossing;
-  for (size_t o = 0; o < present.size(); ++o) {
-    if (!present[o]) continue;
-    crossing.insert(crossing.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
-  }
-  std::sort(crossing.begin(), crossing.end());
-  crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
-  // First bounce: the blocked direct light's radiance through the rays as they now end, and the
-  // radiance those rays no longer see (the static hit's) against what they see instead.
-  // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
-  // on an object included: their tiles are among each tile's sources); a receiver that only has
-  // rays ending on the objects gets their change alone.
+  // Each term of I(present) reads through its rays what the previous term sends on; where a ray
+  // now ends on an object, what the static hit sent in the empty series (the same term) is
+  // replaced by what the object sends: the crossing terms, one per level.
+  const std::vector<uint32_t> crossing = crossing_receivers(op, present);
+  CoarseMap second(nc, glm::vec3(0.0f)), rest(nc, glm::vec3(0.0f));
   CoarseMap first(nc, glm::vec3(0.0f));
+  // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
+  // on an object included: their tiles are among each tile's sources).
   const std::vector<uint32_t> receivers = receivers_of(op, direct_change, {});
-  gather_into(op, present, direct_change, receivers, options.threads, false, first);
+  gather_into(op, present, direct_change, receivers, options.threads, 0, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  for (uint32_t c : crossing) first[c] += crossing_change(op, present, empty, c);
-  CoarseMap change(nc, glm::vec3(0.0f));
-  bounce_on(op, present, std::move(first), options, stats, change);
-  return change;
+  for (uint32_t c : crossing) {
+    first[c] += crossing_change(op, present, empty.direct, 0, c);
+    second[c] += crossing_change(op, present, empty.first, 1, c);
+    rest[c] += crossing_change(op, present, empty.later, 2, c);
+  }
+  return run_series(op, present, std::move(first), &second, &rest, options, stats).total();
 }
 
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
                         const EmptyRadiance& empty) {
   float best = 0.0f;
-  std::vector<uint32_t> receivers;
-  for (size_t o = 0; o < present.size(); ++o)
-    if (present[o])
-      receivers.insert(receivers.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
-  for (uint32_t c : receivers) best = std::max(best, max3(crossing_change(op, present, empty, c)));
+  for (uint32_t c : crossing_receivers(op, present)) {
+    const glm::vec3 v = crossing_change(op, present, empty.direct, 0, c) +
+                        crossing_change(op, present, empty.first, 1, c) +
+                        crossing_change(op, present, empty.later, 2, c);
+    best = std::max(best, max3(v));
+  }
   return best;
-}
-
-CoarseMap bounce_radiance(const GatherOperator& op, const CoarseMap& indirect) {
-  CoarseMap out(indirect.size());
-  for (size_t c = 0; c < out.size(); ++c) out[c] = op.grid.albedo[c] * indirect[c];
-  return out;
 }
 
 void denoise(const CoarseGrid& grid, int levels, CoarseMap& map) {

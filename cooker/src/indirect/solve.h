@@ -52,31 +52,38 @@ CoarseMap coarse_source_of(const GatherOperator& op, const TexelSet& texels, con
 // The same for a fine map (3 channels, or 1 for grey).
 CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const FloatImage& d);
 
-// Indirect irradiance with the objects `present` (one byte per Scene object; empty: none) in
-// place: I = G_V (source + albedo * I).
-CoarseMap solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
-                         const CoarseMap& source, const SolveOptions& options,
-                         SolveStats* stats = nullptr);
-
-// What a group sends on with no object present: its direct light's radiance source and its bounce
-// light's (albedo * I).
-struct EmptyRadiance {
-  CoarseMap direct;
-  CoarseMap bounce;
+// A series' terms by the rays they read (GatherOperator::level_of): the first bounce, the second,
+// and the rest together. Their sum is the indirect irradiance.
+struct Bounces {
+  CoarseMap first, second, rest;
+  CoarseMap total() const;
 };
 
-// albedo * indirect: the radiance a group's bounce light sends on.
-CoarseMap bounce_radiance(const GatherOperator& op, const CoarseMap& indirect);
+// Indirect irradiance with the objects `present` (one byte per Scene object; empty: none) in
+// place, the series of I = G_V (source + albedo * I) bounce by bounce.
+Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
+                       const CoarseMap& source, const SolveOptions& options,
+                       SolveStats* stats = nullptr);
+
+// What a group sends on with no object present, by the series term that reads it: its direct
+// light's radiance source (read by the first bounce), albedo * its first bounce (read by the
+// second), albedo * its later bounces (read by the rest).
+struct EmptyRadiance {
+  CoarseMap direct, first, later;
+};
+EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
+                             const Bounces& bounces);
 
 // What the objects `present` change in a group's indirect light, I(none) - I(present), given what
 // the group sends on with no object present and the radiance source of the direct light the
-// objects block (`direct_change`, from the fine change D(none) - D(present)). Only the receivers
-// that can see a change are visited.
+// objects block (`direct_change`, from the fine change D(none) - D(present)). Term by term the
+// same series as solve_indirect's, so the change is exact to the terms each drops. Only the
+// receivers that can see a change are visited.
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const EmptyRadiance& empty, const CoarseMap& direct_change,
                        const SolveOptions& options, SolveStats* stats = nullptr);
 
-// The largest first-bounce change that objects `present` make where they block no direct light:
+// The largest first-order change that objects `present` make where they block no direct light:
 // per receiver, what its rays that now end on them saw before against what they see now. A cheap
 // bound on whether solve_change() is worth running.
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,

@@ -33,6 +33,7 @@ Furnace furnace(float rho, int n, int samples) {
   Report report;
   ReferenceOptions o;
   o.samples = samples;
+  o.texel_patch = false;  // the flux sums texel-centre values times texel areas
   const ReferenceBake r = bake_reference(s, texels, *tracer, {}, o, progress, report);
   Furnace f;
   double var = 0.0;

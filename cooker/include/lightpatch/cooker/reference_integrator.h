@@ -35,6 +35,10 @@ struct ReferenceOptions {
   double target_noise = 0.0;
   uint64_t seed = 1;
   int threads = 0;  // 0 = all cores
+  // A texel's irradiance is its mean over its surface patch (texel_footprint.h: each path leaves
+  // its own point of it), as the cook's preview and production presets define it; false: at its
+  // sample point, as a cook with one texel sample (draft) does.
+  bool texel_patch = true;
 };
 
 struct ReferenceBake {

@@ -1,0 +1,76 @@
+#include "texel_footprint.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "direct_light.h"
+
+namespace lightpatch::cooker {
+
+namespace {
+
+// Neighbours farther than this many median texel spacings were pushed out of solid geometry (or
+// belong to another part of the chart): they do not bound the footprint.
+constexpr float kMaxGapSpacings = 2.0f;
+// Neighbours must face the same way to be the same surface.
+constexpr float kSameSurfaceCos = 0.7f;
+
+}  // namespace
+
+std::vector<TexelFootprint> texel_footprints(const TexelSet& texels) {
+  const int w = texels.width, h = texels.height;
+  std::vector<TexelFootprint> out(texels.position.size());
+  auto same = [&](size_t a, int x, int y) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return false;
+    const size_t b = texels.index(x, y);
+    return texels.valid[b] && texels.mesh[b] == texels.mesh[a] &&
+           glm::dot(texels.normal[a], texels.normal[b]) >= kSameSurfaceCos;
+  };
+  // The median spacing of neighbouring texels of one surface: the scale of a plausible step.
+  std::vector<float> gaps;
+  for (int y = 0; y < h; y += std::max(1, h / 64))
+    for (int x = 0; x + 1 < w; ++x) {
+      const size_t t = texels.index(x, y);
+      if (texels.valid[t] && same(t, x + 1, y))
+        gaps.push_back(glm::length(texels.position[t + 1] - texels.position[t]));
+    }
+  if (gaps.empty()) return out;
+  std::nth_element(gaps.begin(), gaps.begin() + long(gaps.size() / 2), gaps.end());
+  const float max_gap = kMaxGapSpacings * gaps[gaps.size() / 2];
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t t = texels.index(x, y);
+      if (!texels.valid[t]) continue;
+      const glm::vec3 p = texels.position[t], n = texels.normal[t];
+      // One axis: the step to each neighbour along it that is the same surface nearby.
+      auto axis = [&](int dx, int dy, glm::vec3* step, float* lo, float* hi) {
+        glm::vec3 fwd(0.0f), back(0.0f);
+        bool has_fwd = same(t, x + dx, y + dy), has_back = same(t, x - dx, y - dy);
+        if (has_fwd) fwd = texels.position[texels.index(x + dx, y + dy)] - p;
+        if (has_back) back = p - texels.position[texels.index(x - dx, y - dy)];
+        has_fwd = has_fwd && glm::length(fwd) <= max_gap;
+        has_back = has_back && glm::length(back) <= max_gap;
+        glm::vec3 s = has_fwd && has_back ? 0.5f * (fwd + back) : has_fwd ? fwd : back;
+        s -= n * glm::dot(n, s);  // in the tangent plane
+        *step = s;
+        *lo = has_back ? -0.5f : 0.0f;
+        *hi = has_fwd ? 0.5f : 0.0f;
+      };
+      TexelFootprint& f = out[t];
+      axis(1, 0, &f.u, &f.a0, &f.a1);
+      axis(0, 1, &f.v, &f.b0, &f.b1);
+    }
+  }
+  return out;
+}
+
+glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k, uint64_t rng) {
+  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
+  double a = hash_to_unit(rng) + kA1 * double(k + 1);
+  double b = hash_to_unit(sample_hash(rng, 1, 2, 3)) + kA2 * double(k + 1);
+  a -= std::floor(a);
+  b -= std::floor(b);
+  return centre + f.u * (f.a0 + float(a) * (f.a1 - f.a0)) + f.v * (f.b0 + float(b) * (f.b1 - f.b0));
+}
+
+}  // namespace lightpatch::cooker
