@@ -30,6 +30,13 @@ void write_report(const std::string& path, Report& report, double seconds) {
   report.write(path);
 }
 
+// Enough digits to give the same float back (for --output-step).
+std::string step_text(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", double(v));
+  return text;
+}
+
 // --threads, --quiet and --report of the verbs that run work.
 struct RunOptions {
   int threads = 0;
@@ -60,14 +67,17 @@ int verb_plan(Args& args) {
   s.scene_path = o.scene_path;
   s.layout = o.layout;
   s.bake = o.bake;
-  const std::vector<CookJob> jobs = plan_job_dir(o.output, s, progress, report);
+  const PlannedJobs planned = plan_job_dir(o.output, s, progress, report);
+  const std::vector<CookJob>& jobs = planned.jobs;
   size_t done = 0;
   for (const JobState& j : job_dir_state(o.output)) done += j.done ? 1 : 0;
   for (const CookJob& j : jobs) std::printf("%s\n", j.name.c_str());
   std::fflush(stdout);
   progress.message("planned " + std::to_string(jobs.size()) + " jobs in " + o.output + ": " +
                    std::to_string(done) + " have their result, " +
-                   std::to_string(jobs.size() - done) + " to run");
+                   std::to_string(jobs.size() - done) + " to run; output step " +
+                   step_text(planned.output_step) +
+                   (o.bake.output_step > 0.0f ? " (pinned)" : " (--output-step pins it)"));
   write_report(o.report_path, report, since(t0));
   return 0;
 }

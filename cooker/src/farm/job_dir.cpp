@@ -320,8 +320,8 @@ std::string stale_message(const std::string& name) {
 
 }  // namespace
 
-std::vector<CookJob> plan_job_dir(const std::string& dir, const CookSettings& settings,
-                                  Progress& progress, Report& report) {
+PlannedJobs plan_job_dir(const std::string& dir, const CookSettings& settings, Progress& progress,
+                         Report& report) {
   CookSettings s = settings;
   s.scene_path = fs::absolute(s.scene_path).lexically_normal().string();
   std::error_code ec;
@@ -345,8 +345,9 @@ std::vector<CookJob> plan_job_dir(const std::string& dir, const CookSettings& se
                                   {"version", kJobDirVersion},
                                   {"tool", tool_identity()},
                                   {"settings", settings_j},
+                                  {"output_step", r.jobs->session().output_step()},
                                   {"jobs", list}});
-  return jobs;
+  return {jobs, r.jobs->session().output_step()};
 }
 
 std::vector<JobState> job_dir_state(const std::string& dir) {

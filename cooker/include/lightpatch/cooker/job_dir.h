@@ -39,10 +39,14 @@ struct CookSettings {
 };
 
 // Imports, lays out and plans the cook (no tracing of bounce rays), creates `dir` if needed and
-// writes the manifest and the job files. The jobs in an order they may run (the gather rays
-// first). Throws CookError.
-std::vector<CookJob> plan_job_dir(const std::string& dir, const CookSettings& settings,
-                                  Progress& progress, Report& report);
+// writes the manifest and the job files. Throws CookError.
+struct PlannedJobs {
+  std::vector<CookJob> jobs;  // in an order they may run (the gather rays first)
+  // The step the jobs were planned with (BakeOptions::output_step pins it for later plans).
+  float output_step = 0.0f;
+};
+PlannedJobs plan_job_dir(const std::string& dir, const CookSettings& settings, Progress& progress,
+                         Report& report);
 
 // The manifest's jobs and, for each, whether `dir` holds a valid result for it (its header
 // names the job's hash and its checksum holds). Throws CookError if the manifest is unreadable.
