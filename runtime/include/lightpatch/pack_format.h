@@ -32,6 +32,20 @@
 //   value = kFlagNegative ? -v : v
 // Values are irradiance in the lights' units (W/m^2-like "lux" for intensity 1 of the owning
 // light for contribution/shadow/correction patches; absolute for base patches).
+//
+// Two target maps. Bounce light is smooth, so a pack may store it at a reduced resolution: the
+// indirect map, lightmap_width / indirect_scale x lightmap_height / indirect_scale texels
+// (Header::indirect_scale 2, 4 or 8; 0: the pack has none). A patch draws into the light map
+// (PatchRecord::target kTargetLightMap, rectangles in light-map texels) or into the indirect map
+// (kTargetIndirectMap, rectangles in indirect-map texels). What a game lights a surface with, at
+// light-map UV (u, v), is
+//   light(u, v) = L(u, v) + I(u, v)
+// where L is the light map sampled at its texel (or bilinearly, as the game likes) and I is the
+// indirect map sampled bilinearly with its texel centres at ((i + 0.5) / W_i, (j + 0.5) / H_i),
+// clamped to its edge texels: at the centre of light-map texel (x, y), I is interpolated at
+// indirect-texel coordinates ((x + 0.5) / s - 0.5, (y + 0.5) / s - 0.5). The cooker lays charts
+// out on s x s blocks with a ring of blocks of their own, so that interpolation never mixes two
+// charts; the light map holds what the indirect map cannot (direct light, sharp bounce detail).
 #pragma once
 
 #include <cstddef>
@@ -76,7 +90,9 @@ struct Header {
   uint32_t atlas_count;
   uint32_t mesh_count;
   uint32_t flags;  // reserved, 0
-  uint32_t reserved0;
+  // Light-map texels per indirect-map texel along each axis: 2, 4 or 8, dividing lightmap_width
+  // and lightmap_height; 0: no indirect map (every patch targets the light map).
+  uint32_t indirect_scale;
 };
 static_assert(sizeof(Header) == 64);
 static_assert(offsetof(Header, file_size) == 8);
@@ -86,6 +102,7 @@ static_assert(offsetof(Header, lightmap_width) == 24);
 static_assert(offsetof(Header, light_count) == 32);
 static_assert(offsetof(Header, patch_count) == 44);
 static_assert(offsetof(Header, mesh_count) == 52);
+static_assert(offsetof(Header, indirect_scale) == 60);
 
 struct SectionEntry {
   uint32_t type;      // SectionType
@@ -153,24 +170,27 @@ static_assert(sizeof(GroupRecord) == 16);
 static_assert(offsetof(GroupRecord, first_patch) == 8);
 
 enum PatchEncoding : uint8_t { kEncodingLinear = 0, kEncodingSquare = 1 };
+// The map a patch draws into (see "Two target maps" above).
+enum PatchTarget : uint8_t { kTargetLightMap = 0, kTargetIndirectMap = 1 };
 enum PatchFlags : uint8_t {
   kFlagNegative = 1u << 0,  // decoded values are subtracted from (added with sign -1 to) the map
 };
 
-// One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of the light
-// map. Rectangles are in texels with the origin at the top-left of the image (row 0 is the first
-// row of the atlas data, and glTF v = 0 in the light map).
+// One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of its target
+// map (the light map, or the indirect map). Rectangles are in texels of that map with the origin
+// at the top-left of the image (row 0 is the first row of the atlas data, and glTF v = 0). A
+// group's patches that target the light map come first, then those that target the indirect map.
 struct PatchRecord {
   uint16_t atlas_x, atlas_y;  // top-left texel in the atlas
   uint16_t width, height;     // texels, >= 1
-  uint16_t dest_x, dest_y;    // top-left texel in the light map
+  uint16_t dest_x, dest_y;    // top-left texel in the target map
   uint8_t atlas;              // atlas index
   uint8_t channel;            // first atlas channel (0=R .. 3=A)
   uint8_t channel_count;  // 1 (grey: same value in R,G,B of the map) or 3 (RGB from channel..+2)
   uint8_t encoding;       // PatchEncoding
   float scale;            // finite, > 0
   uint8_t flags;          // PatchFlags
-  uint8_t reserved;       // 0
+  uint8_t target;         // PatchTarget
   uint16_t group;         // index of the owning GroupRecord (redundant, validated)
 };
 static_assert(sizeof(PatchRecord) == 24);

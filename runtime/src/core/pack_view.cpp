@@ -164,8 +164,12 @@ Status Validator::run(Parsed* out) {
                 static_cast<unsigned long long>(h.file_size),
                 static_cast<unsigned long long>(size_));
   }
-  if (h.flags != 0 || h.reserved0 != 0)
-    return fail(Status::kCorrupt, "header: reserved fields not zero");
+  if (h.flags != 0) return fail(Status::kCorrupt, "header: reserved fields not zero");
+  // Indirect maps: the reader that draws them lands with their writer (issue 12); until then a
+  // pack that has one is refused by name rather than drawn wrong.
+  if (h.indirect_scale != 0)
+    return fail(Status::kUnsupported, "header: indirect map at scale %u: this reader has none",
+                h.indirect_scale);
   if (h.lightmap_width == 0 || h.lightmap_height == 0 || h.lightmap_width > kMaxLightmapSize ||
       h.lightmap_height > kMaxLightmapSize) {
     return fail(Status::kCorrupt, "light-map size %ux%u out of range 1..%u", h.lightmap_width,
@@ -417,9 +421,9 @@ Status Validator::run(Parsed* out) {
     if (!std::isfinite(p.scale) || !(p.scale > 0.0f)) {
       return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
     }
-    if ((p.flags & ~uint32_t(kFlagNegative)) != 0 || p.reserved != 0) {
-      return fail(Status::kCorrupt, "patch %u: unknown flags %02x or reserved byte not zero", i,
-                  p.flags);
+    if ((p.flags & ~uint32_t(kFlagNegative)) != 0 || p.target != kTargetLightMap) {
+      return fail(Status::kCorrupt, "patch %u: unknown flags %02x or target %u", i, p.flags,
+                  p.target);
     }
   }
 
