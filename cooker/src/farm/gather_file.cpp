@@ -60,13 +60,17 @@ class Writer {
     raw(&n, sizeof n);
     const uint8_t w = uint8_t(std::max(1, int(std::bit_width(limit))));
     raw(&w, 1);
+    // Least significant bit first, a value's bits after the previous value's (w <= 32, so the
+    // accumulator never holds more than 39 bits).
     std::vector<uint8_t> bits((n * w + 7) / 8, 0);
-    uint64_t at = 0;
+    uint64_t acc = 0;
+    int held = 0;
+    size_t o = 0;
     for (uint32_t x : v) {
-      const uint64_t value = x == kNoTexel ? limit : x;
-      for (int b = 0; b < w; ++b, ++at)
-        if ((value >> b) & 1u) bits[at / 8] |= uint8_t(1u << (at % 8));
+      acc |= uint64_t(x == kNoTexel ? limit : x) << held;
+      for (held += w; held >= 8; held -= 8, acc >>= 8) bits[o++] = uint8_t(acc);
     }
+    if (held > 0) bits[o] = uint8_t(acc);
     raw(bits.data(), bits.size());
   }
 };
@@ -116,11 +120,17 @@ class Reader {
     if (n != expect || w != std::max(1, int(std::bit_width(limit))))
       throw CookError(std::string("gather file: bad size of ") + what);
     const uint8_t* bits = need((n * w + 7) / 8, what);
+    // As Writer::packed: reads exactly the (n * w + 7) / 8 bytes.
     std::vector<uint32_t> v(n);
-    uint64_t at = 0;
+    const uint64_t mask = (uint64_t(1) << w) - 1;
+    uint64_t acc = 0;
+    int held = 0;
+    size_t at = 0;
     for (uint64_t i = 0; i < n; ++i) {
-      uint32_t x = 0;
-      for (int b = 0; b < w; ++b, ++at) x |= uint32_t((bits[at / 8] >> (at % 8)) & 1u) << b;
+      for (; held < w; held += 8) acc |= uint64_t(bits[at++]) << held;
+      const uint32_t x = uint32_t(acc & mask);
+      acc >>= w;
+      held -= w;
       if (x > limit) throw CookError(std::string("gather file: index out of range in ") + what);
       v[i] = x == limit ? kNoTexel : x;
     }
