@@ -10,6 +10,7 @@
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
+#include "map_split.h"
 #include "pack_writer.h"
 #include "patch_extract.h"
 #include "quantize.h"
@@ -25,6 +26,7 @@ namespace {
 
 struct MapJob {
   const FloatImage* map = nullptr;
+  const FloatImage* indirect = nullptr;  // its bounce part's block image, or null
   SourcePatch prototype;
   float threshold = 0.0f;
   std::string what;
@@ -124,6 +126,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   {
     MapJob j;
     j.map = &maps.base;
+    j.indirect = &maps.base_indirect;
     j.prototype.kind = kGroupBase;
     j.threshold = base_threshold;
     j.what = "base map";
@@ -132,6 +135,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   for (size_t i = 0; i < maps.lights.size(); ++i) {
     MapJob j;
     j.map = &maps.contribution[i];
+    if (i < maps.contribution_indirect.size()) j.indirect = &maps.contribution_indirect[i];
     j.prototype.kind = kGroupContribution;
     j.prototype.light = int(i);
     j.prototype.weight = authored[i];
@@ -158,6 +162,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     }
     MapJob j;
     j.map = &s.map;
+    j.indirect = &s.indirect;
     j.prototype.kind = kGroupShadow;
     j.prototype.light = s.light;
     j.prototype.object = s.object;
@@ -190,6 +195,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     }
     MapJob j;
     j.map = &p.map;
+    j.indirect = &p.indirect;
     j.prototype.kind = kGroupPairCorrection;
     j.prototype.light = p.light;
     j.prototype.object = p.object_a;
@@ -216,6 +222,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       throw CookError("two static shadow maps for object " + std::to_string(s.object));
     MapJob j;
     j.map = &s.map;
+    j.indirect = &s.indirect;
     j.prototype.kind = kGroupStaticShadow;
     j.prototype.object = s.object;
     j.threshold = base_threshold;  // absolute irradiance, like the base map
@@ -224,43 +231,123 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     jobs.push_back(j);
   }
 
+  // The indirect map (pack_format.h, "Two target maps"): a map whose bounce part the bake made on
+  // s x s blocks (BakedMaps::base_indirect, ...) is stored as that block image (indirect-map
+  // patches) plus light-map patches of the rest, the map less the block image's magnification
+  // (map_split.h), where that takes fewer atlas texels than light-map patches alone.
+  const int scale = layout.align;
+  const bool can_split = scale > 1 && layout.width % scale == 0 && layout.height % scale == 0 &&
+                         options.texels && options.texels->width == layout.width &&
+                         options.texels->height == layout.height;
+  const int coarse_w = can_split ? layout.width / scale : 0;
+  const int coarse_h = can_split ? layout.height / scale : 0;
+  const std::vector<Region> coarse =
+      can_split ? coarse_regions(layout.regions, scale, coarse_w, coarse_h) : std::vector<Region>{};
+  for (const MapJob& j : jobs) {
+    if (!j.indirect || j.indirect->data.empty() || !can_split) continue;
+    if (j.indirect->width != coarse_w || j.indirect->height != coarse_h ||
+        j.indirect->channels != 3)
+      throw CookError(j.what + ": its indirect block image does not match the layout's " +
+                      std::to_string(scale) + "x" + std::to_string(scale) + " blocks");
+  }
+
   // Patches (paper Alg. 4) and their quantization, one map per work item.
   const int threads = worker_count(0);
   std::vector<std::vector<SourcePatch>> per_job(jobs.size());
+  std::vector<std::vector<QuantizedPatch>> per_job_q(jobs.size());  // indirect patches, quantized
   struct ColourDecision {
     int three = 0, one = 0;  // 3-channel patches kept, collapsed to 1
     float max_spread = 0.0f;
   };
   std::vector<ColourDecision> colour(jobs.size());
+  struct SplitDecision {
+    bool split = false;
+    uint64_t plain = 0, detail = 0, indirect = 0;  // atlas channel-texels (gutters included)
+  };
+  std::vector<SplitDecision> split(jobs.size());
   parallel_for(int(jobs.size()), threads, [&](int i) {
     const MapJob& j = jobs[size_t(i)];
-    extract_patches(*j.map, layout.regions, j.threshold, max_dim, j.prototype, j.what,
-                    per_job[size_t(i)]);
-    // Bounce tints C_l and S_ol; a light's colour is a run-time factor, so a patch keeps three
-    // channels only where the tint shows above the 8-bit step (B is always 3: authored colours).
-    if (j.prototype.kind == kGroupBase) return;
-    for (SourcePatch& p : per_job[size_t(i)]) {
-      if (p.channels != 3) continue;
-      const float spread = colour_spread(p);
-      const bool collapsed = !options.keep_colour && collapse_untinted(p, spread);
-      ColourDecision& d = colour[size_t(i)];
-      (collapsed ? d.one : d.three)++;
-      d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);
+    // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
+    // so a patch keeps three channels only where the tint shows above the 8-bit step (B is
+    // always 3: authored colours).
+    auto cut = [&](const FloatImage& map, const std::vector<Region>& regions, uint8_t target,
+                   std::vector<SourcePatch>& out, ColourDecision& d) {
+      const size_t first = out.size();
+      SourcePatch prototype = j.prototype;
+      prototype.target = target;
+      extract_patches(map, regions, j.threshold, max_dim, prototype, j.what, out);
+      if (j.prototype.kind == kGroupBase) return;
+      for (size_t k = first; k < out.size(); ++k) {
+        SourcePatch& p = out[k];
+        if (p.channels != 3) continue;
+        const float spread = colour_spread(p);
+        const bool collapsed = !options.keep_colour && collapse_untinted(p, spread);
+        (collapsed ? d.one : d.three)++;
+        d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);
+      }
+    };
+    auto cost = [](const std::vector<SourcePatch>& v) {
+      uint64_t n = 0;
+      for (const SourcePatch& p : v)
+        n += uint64_t(p.dest.w + 2) * uint64_t(p.dest.h + 2) * p.channels;
+      return n;
+    };
+    std::vector<SourcePatch> plain;
+    cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)]);
+    SplitDecision& sd = split[size_t(i)];
+    sd.plain = cost(plain);
+    if (can_split && j.indirect && !j.indirect->data.empty() && !plain.empty()) {
+      ColourDecision dsplit;
+      std::vector<SourcePatch> indirect;
+      // A grey map's bounce part is grey too (one channel where the bounce is untinted).
+      cut(*j.indirect, coarse, kTargetIndirectMap, indirect, dsplit);
+      std::vector<QuantizedPatch> indirect_q(indirect.size());
+      FloatImage decoded(coarse_w, coarse_h, 3);
+      for (size_t k = 0; k < indirect.size(); ++k) {
+        indirect_q[k] = quantize_patch(indirect[k], options.encoding);
+        add_decoded(indirect[k], indirect_q[k], decoded);
+      }
+      std::vector<SourcePatch> detail;
+      cut(light_map_part(*j.map, decoded, scale, scene, layout, *options.texels), layout.regions,
+          kTargetLightMap, detail, dsplit);
+      sd.detail = cost(detail);
+      sd.indirect = cost(indirect);
+      if (sd.detail + sd.indirect < sd.plain) {
+        sd.split = true;
+        colour[size_t(i)] = dsplit;
+        // A group's light-map patches first, then its indirect ones (pack_format.h).
+        for (SourcePatch& p : indirect) detail.push_back(std::move(p));
+        per_job[size_t(i)] = std::move(detail);
+        per_job_q[size_t(i)] = std::move(indirect_q);
+        return;
+      }
     }
+    per_job[size_t(i)] = std::move(plain);
   });
   std::vector<SourcePatch> patches;
-  for (auto& v : per_job) {
-    for (auto& p : v) patches.push_back(std::move(p));
+  std::vector<QuantizedPatch> quantized;
+  std::vector<uint8_t> to_quantize;
+  bool any_split = false;
+  for (size_t i = 0; i < per_job.size(); ++i) {
+    const size_t detail = per_job[i].size() - per_job_q[i].size();
+    for (size_t k = 0; k < per_job[i].size(); ++k) {
+      patches.push_back(std::move(per_job[i][k]));
+      quantized.push_back(k < detail ? QuantizedPatch{} : std::move(per_job_q[i][k - detail]));
+      to_quantize.push_back(k < detail ? 1 : 0);
+    }
+    any_split = any_split || split[i].split;
   }
   per_job.clear();
-  std::vector<QuantizedPatch> quantized(patches.size());
+  per_job_q.clear();
   parallel_for(int(patches.size()), threads, [&](int i) {
-    quantized[size_t(i)] = quantize_patch(patches[size_t(i)], options.encoding);
+    if (to_quantize[size_t(i)])
+      quantized[size_t(i)] = quantize_patch(patches[size_t(i)], options.encoding);
   });
 
   PackContents c;
   c.lightmap_width = uint32_t(layout.width);
   c.lightmap_height = uint32_t(layout.height);
+  c.indirect_scale = any_split ? uint32_t(scale) : 0;
   for (size_t i = 0; i < maps.lights.size(); ++i) {
     const Light& l = scene.lights[size_t(maps.lights[i])];
     LightRecord r{};
@@ -341,6 +428,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     r.encoding = q.encoding;
     r.scale = q.scale;
     r.flags = p.negative ? kFlagNegative : 0;
+    r.target = p.target;
     c.patches.push_back(r);
   }
   for (size_t g = 0; g < c.groups.size(); ++g) {
@@ -424,6 +512,45 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["patches"] = patches.size();
   j["patches_by_kind"] = by_kind;
   j["negative_patches"] = negative;
+  {
+    uint64_t count[2] = {0, 0}, texels[2] = {0, 0};
+    for (const SourcePatch& p : patches) {
+      count[p.target != 0] += 1;
+      texels[p.target != 0] += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+    }
+    j["patches_by_target"] = {{"light_map", count[0]}, {"indirect_map", count[1]}};
+    j["texels_by_target"] = {{"light_map", texels[0]}, {"indirect_map", texels[1]}};
+    nlohmann::json& im = j["indirect_map"];
+    im["scale"] = c.indirect_scale;
+    im["layout_align"] = layout.align;
+    im["width"] = c.indirect_scale ? layout.width / int(c.indirect_scale) : 0;
+    im["height"] = c.indirect_scale ? layout.height / int(c.indirect_scale) : 0;
+    im["rule"] =
+        "each map is stored either as light-map patches only, or as the means of its s x s texel "
+        "blocks (indirect-map patches) plus light-map patches of what their bilinear "
+        "magnification leaves out (taken against the quantized block means), whichever takes "
+        "fewer atlas channel-texels, gutters included";
+    int n_split = 0;
+    uint64_t plain = 0, stored = 0;
+    nlohmann::json per_map = nlohmann::json::array();
+    for (size_t i = 0; i < jobs.size(); ++i) {
+      const SplitDecision& d = split[i];
+      n_split += d.split ? 1 : 0;
+      plain += d.plain;
+      stored += d.split ? d.detail + d.indirect : d.plain;
+      if (!can_split || d.plain == 0) continue;
+      per_map.push_back({{"map", jobs[i].what},
+                         {"split", d.split},
+                         {"light_map_only", d.plain},
+                         {"light_map_part", d.detail},
+                         {"indirect_part", d.indirect}});
+    }
+    im["maps_split"] = n_split;
+    im["maps_light_map_only"] = int(jobs.size()) - n_split;
+    im["channel_texels_light_map_only"] = plain;
+    im["channel_texels_stored"] = stored;
+    im["maps"] = per_map;
+  }
   j["groups"] = c.groups.size();
   j["significance_rule"] =
       "a texel is significant when some channel exceeds half an 8-bit output step at the authored "

@@ -71,6 +71,7 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
   h.section_count = static_cast<uint32_t>(sections.size());
   h.lightmap_width = c.lightmap_width;
   h.lightmap_height = c.lightmap_height;
+  h.indirect_scale = c.indirect_scale;
   h.light_count = static_cast<uint32_t>(c.lights.size());
   h.object_count = static_cast<uint32_t>(c.objects.size());
   h.group_count = static_cast<uint32_t>(c.groups.size());

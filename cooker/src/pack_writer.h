@@ -12,6 +12,7 @@ namespace lightpatch::cooker {
 
 struct PackContents {
   uint32_t lightmap_width = 0, lightmap_height = 0;
+  uint32_t indirect_scale = 0;  // Header::indirect_scale (0: no indirect map)
   std::vector<pack::LightRecord> lights;
   std::vector<pack::ObjectRecord> objects;
   std::vector<pack::GroupRecord> groups;

@@ -18,8 +18,9 @@ struct SourcePatch {
   int object = -1;    // pack object index or -1
   int object_b = -1;  // second object of a pair correction, or -1
   bool negative = false;
-  int channels = 1;  // 1 or 3
-  Rect dest;         // in the light map
+  uint8_t target = 0;  // pack::PatchTarget
+  int channels = 1;    // 1 or 3
+  Rect dest;           // in the target map
   // Magnitudes (sign removed, >= 0), dest.w * dest.h * channels, row-major from the top.
   std::vector<float> values;
   // Per texel: 1 where the value (of this patch's sign) is significant; errors are measured there.

@@ -280,13 +280,17 @@ constexpr float kChartGapTexels = 2.0f;
 // surface), packs charts per region and regions into the smallest square page (a multiple of 4)
 // that holds them, at most `max_page`, or exactly `fixed_page`.
 Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, float tpu,
-                int border, int fixed_page, int max_page) {
+                int border, int align, int fixed_page, int max_page) {
+  // Rectangles on whole blocks with a block of border of their own (LayoutOptions::align).
+  border = std::max(border, align);
+  auto whole = [&](int texels) { return (texels + align - 1) / align * align; };
+  const int step = std::max(4, align);  // the page is a multiple of this
   int64_t total = 0;
   for (RegionCharts& r : regions) {
     if (r.uv1) {
       r.scale = tpu * r.density * r.texels_per_uv;
-      r.w = std::max(1, static_cast<int>(std::ceil(r.uv_size.x * r.scale))) + 2 * border;
-      r.h = std::max(1, static_cast<int>(std::ceil(r.uv_size.y * r.scale))) + 2 * border;
+      r.w = whole(std::max(1, static_cast<int>(std::ceil(r.uv_size.x * r.scale))) + 2 * border);
+      r.h = whole(std::max(1, static_cast<int>(std::ceil(r.uv_size.y * r.scale))) + 2 * border);
       total += int64_t(r.w) * r.h;
       continue;
     }
@@ -296,8 +300,8 @@ Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, 
     for (int ci : r.charts) {
       Chart& c = charts[size_t(ci)];
       const float density = tpu * r.density;
-      c.rect_w = std::max(1, static_cast<int>(std::ceil(c.size.x * density))) + 2 * border;
-      c.rect_h = std::max(1, static_cast<int>(std::ceil(c.size.y * density))) + 2 * border;
+      c.rect_w = whole(std::max(1, static_cast<int>(std::ceil(c.size.x * density))) + 2 * border);
+      c.rect_h = whole(std::max(1, static_cast<int>(std::ceil(c.size.y * density))) + 2 * border);
       sizes.push_back({c.rect_w, c.rect_h});
       area += int64_t(c.rect_w) * c.rect_h;
       widest = std::max(widest, c.rect_w);
@@ -325,14 +329,14 @@ Packed pack_all(std::vector<Chart>& charts, std::vector<RegionCharts>& regions, 
     result.page = fixed_page;
     result.fits = fits(fixed_page);
   } else {
-    int page =
-        std::max(kMinPage, (static_cast<int>(std::ceil(std::sqrt(double(total)))) + 3) / 4 * 4);
-    while (page <= max_page && !fits(page)) page += std::max(4, page / 32 / 4 * 4);
+    int page = std::max(
+        kMinPage, (static_cast<int>(std::ceil(std::sqrt(double(total)))) + step - 1) / step * step);
+    while (page <= max_page && !fits(page)) page += std::max(step, page / 32 / step * step);
     result.page = std::min(page, max_page);
     result.fits = page <= max_page && fits(result.page);
   }
   // A page of fixed size stays square; a derived one ends below its last shelf.
-  result.height = fixed_page > 0 ? fixed_page : std::max(kMinPage, (used + 3) / 4 * 4);
+  result.height = fixed_page > 0 ? fixed_page : std::max(kMinPage, (used + step - 1) / step * step);
   if (result.fits)
     for (size_t i = 0; i < regions.size(); ++i) {
       regions[i].x = pos[i].first;
@@ -536,9 +540,16 @@ Layout verbatim_layout(const Scene& scene, const std::vector<Region>& regions,
     const double tpu = options.texels_per_unit > 0.0f ? options.texels_per_unit
                                                       : std::sqrt(kDefaultSurfaceTexels / area);
     page = static_cast<int>(std::ceil(std::sqrt(area) * tpu * 1.3));
-    page = std::clamp((page + 3) / 4 * 4, kMinPage, options.max_lightmap_size);
+    const int step = std::max(4, options.align);
+    page = std::clamp((page + step - 1) / step * step, kMinPage,
+                      options.max_lightmap_size / step * step);
   }
   layout.width = layout.height = page;
+  // The UVs are used as they are, so charts are not on blocks: the pack still splits each map
+  // into an indirect and a light-map part where that is smaller, the light map holding whatever
+  // the interpolation mixes across charts.
+  layout.align = options.align;
+  while (page % layout.align != 0) layout.align /= 2;
   layout.texels_per_unit = static_cast<float>(page / std::sqrt(area) / 1.3);
   layout.meshes.resize(scene.meshes.size());
   for (const Region& r : regions)
@@ -643,6 +654,14 @@ std::vector<SeamEdge> find_seams(const Scene& scene, const Layout& layout) {
 }  // namespace
 
 Layout build_layout(const Scene& scene, const LayoutOptions& options) {
+  if (options.align != 1 && options.align != 2 && options.align != 4 && options.align != 8)
+    throw CookError("layout: the indirect scale must be 1, 2, 4 or 8, not " +
+                    std::to_string(options.align));
+  if (options.align_required && options.lightmap_size > 0 &&
+      options.lightmap_size % options.align != 0)
+    throw CookError("--lightmap-size " + std::to_string(options.lightmap_size) +
+                    " is not a multiple of the indirect scale " + std::to_string(options.align) +
+                    " (the indirect map must tile the light map)");
   if (scene.meshes.empty()) throw CookError("the scene has no meshes to bake");
   std::vector<Region> base_regions = make_regions(scene);
   if (base_regions.empty())
@@ -712,20 +731,41 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
   const float requested = options.texels_per_unit > 0.0f
                               ? options.texels_per_unit
                               : static_cast<float>(std::sqrt(kDefaultSurfaceTexels / area));
-  const int max_page = std::clamp(options.max_lightmap_size, kMinPage, 16384);
+  // An automatic alignment halves until the charts fit the page (LayoutOptions::align_required).
+  int align = options.align;
   float tpu = requested;
   Packed packed;
-  for (int attempt = 0; attempt < 200; ++attempt) {
-    packed = pack_all(charts, regions, tpu, options.border_texels, options.lightmap_size, max_page);
-    if (packed.fits) break;
-    tpu *= kDensityStep;
+  for (;;) {
+    const int max_page = std::clamp(options.max_lightmap_size, kMinPage, 16384) /
+                         std::max(4, align) * std::max(4, align);
+    tpu = requested;
+    const bool page_divides = options.lightmap_size <= 0 || options.lightmap_size % align == 0;
+    for (int attempt = 0; page_divides && attempt < 200; ++attempt) {
+      packed = pack_all(charts, regions, tpu, options.border_texels, align, options.lightmap_size,
+                        max_page);
+      if (packed.fits) break;
+      tpu *= kDensityStep;
+    }
+    if ((page_divides && packed.fits) || align == 1 || options.align_required) {
+      if (!packed.fits) {
+        throw CookError(
+            "the light-map charts (" + std::to_string(charts.size()) + " charts, " +
+            std::to_string(regions.size()) + " nodes) do not fit a " +
+            std::to_string(options.lightmap_size > 0 ? options.lightmap_size : max_page) +
+            "² page even at a very low density" +
+            (align > 1 ? " with charts on " + std::to_string(align) + "x" + std::to_string(align) +
+                             " blocks (--indirect-scale)"
+                       : std::string()) +
+            "; raise --lightmap-size");
+      }
+      break;
+    }
+    layout.notes.push_back("charts on " + std::to_string(align) + "x" + std::to_string(align) +
+                           " blocks do not fit the page: indirect scale lowered to " +
+                           std::to_string(align / 2));
+    align /= 2;
   }
-  if (!packed.fits) {
-    throw CookError("the light-map charts (" + std::to_string(charts.size()) + " charts, " +
-                    std::to_string(regions.size()) + " nodes) do not fit a " +
-                    std::to_string(options.lightmap_size > 0 ? options.lightmap_size : max_page) +
-                    "² page even at a very low density; raise --lightmap-size");
-  }
+  layout.align = align;
   if (tpu < requested) {
     char buf[256];
     std::snprintf(buf, sizeof(buf),
@@ -743,7 +783,7 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
   layout.meshes.resize(scene.meshes.size());
 
   const glm::vec2 inv(1.0f / float(layout.width), 1.0f / float(layout.height));
-  const int border = options.border_texels;
+  const int border = std::max(options.border_texels, layout.align);
   std::vector<std::vector<uint32_t>> tri_indices(scene.meshes.size());
   std::string close_charts;  // TEXCOORD_1 regions whose charts share texels
   for (RegionCharts& r : regions) {

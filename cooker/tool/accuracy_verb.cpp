@@ -23,6 +23,7 @@
 #include "args.h"
 #include "gles_backend.h"
 #include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/cook.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/io.h"
@@ -114,10 +115,11 @@ struct Prepared {
   TexelSet texels;
 };
 
-Prepared prepare_layout(const Scene& scene, const Tracer& tracer, int lightmap_size) {
+Prepared prepare_layout(const Scene& scene, const Tracer& tracer, int lightmap_size, int align) {
   Prepared p;
   LayoutOptions lo;
   lo.lightmap_size = lightmap_size;
+  lo.align = align;
   p.layout = build_layout(scene, lo);
   p.texels = build_texels(scene, p.layout, &tracer);
   return p;
@@ -335,8 +337,8 @@ std::vector<Setting> make_sweep(const AccuracyOptions& o, bool has_area_lights, 
     s.push_back(x);
   }
   for (int n : {1, 4, 8}) {
-    Setting x = turned(p, "indirect_level=" + std::to_string(n), "indirect level");
-    x.bake.indirect_level = n;
+    Setting x = turned(p, "indirect_scale=" + std::to_string(n), "indirect scale");
+    x.bake.indirect_scale = n;
     s.push_back(x);
   }
   for (int n : {0, 1, 3}) {
@@ -412,7 +414,7 @@ std::string number(double v, const char* format = "%.6g") {
 std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string>& notes) {
   std::string s;
   for (const std::string& n : notes) s += "# " + n + "\n";
-  s += "setting,knob,quality,gather_rays,indirect_level,denoise,area_samples,lightmap_size,"
+  s += "setting,knob,quality,gather_rays,indirect_scale,denoise,area_samples,lightmap_size,"
        "encoding,cook_s,rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto,rel_rmse_excess,"
        "within_noise\n";
   for (const Row& r : rows) {
@@ -599,7 +601,10 @@ int verb_accuracy(Args& args) {
   const std::unique_ptr<Tracer> tracer = make_embree_tracer(scene);
   progress.end();
   progress.begin("layout and texels", 1);
-  const Prepared ref_layout = prepare_layout(scene, *tracer, o.lightmap_size);
+  // The reference's layout is aligned as the preview preset's, which most rows use.
+  BakeOptions preview;
+  const int ref_align = layout_align(preview);
+  const Prepared ref_layout = prepare_layout(scene, *tracer, o.lightmap_size, ref_align);
   progress.end();
   for (const std::string& note : ref_layout.layout.notes) progress.message("note: " + note);
 
@@ -785,9 +790,11 @@ int verb_accuracy(Args& args) {
     row.setting = setting;
     const Prepared* prepared = &ref_layout;
     Prepared other;
-    if (setting.lightmap_size > 0 && setting.lightmap_size != o.lightmap_size) {
+    const int size = setting.lightmap_size > 0 ? setting.lightmap_size : o.lightmap_size;
+    const int align = layout_align(setting.bake);
+    if (size != o.lightmap_size || align != ref_align) {
       try {
-        other = prepare_layout(scene, *tracer, setting.lightmap_size);
+        other = prepare_layout(scene, *tracer, size, align);
       } catch (const CookError& e) {
         skipped.push_back(setting.name + " skipped: " + e.what());
         progress.message("note: " + skipped.back());
@@ -817,6 +824,7 @@ int verb_accuracy(Args& args) {
     Report report;
     PackOptions pack_options;
     pack_options.encoding = setting.encoding;
+    pack_options.texels = &prepared->texels;
     const std::vector<uint8_t> pack =
         build_pack(scene, prepared->layout, reuse->maps, pack_options, report);
     row.cook_s = reuse->seconds + since(t);
@@ -869,6 +877,7 @@ int verb_accuracy(Args& args) {
       Report report;
       PackOptions pack_options;
       pack_options.encoding = e;
+      pack_options.texels = &ref_layout.texels;
       const std::vector<uint8_t> pack =
           build_pack(scene, ref_layout.layout, source->maps, pack_options, report);
       RuntimeRow cpu;

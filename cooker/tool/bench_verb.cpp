@@ -1,7 +1,7 @@
 // `lightpatch bench PACK [--json]`: the GLES runtime's costs on the current driver (an EGL
 // surfaceless context): full rebuild, incremental light change, object toggle, frames at several
-// budgets, GPU memory, and the fill-rate floor measured in the same run (the rebuild's texel count
-// as full-target blended quads with the same program) with the rebuild's ratio to it.
+// budgets, GPU memory by texture, and the fill-rate floor measured in the same run (the rebuild's
+// texel count as full-target blended quads with the same program) with the rebuild's ratio to it.
 // Times are wall-clock around glFinish(); each is the median of several runs.
 #include <nlohmann/json.hpp>
 
@@ -34,6 +34,26 @@ void check(Status s, const char* what) {
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
+}
+
+// Texels a change wrote (FrameStats), split by target.
+struct ChangeTexels {
+  uint64_t total = 0, indirect = 0;
+  bool operator<(const ChangeTexels& o) const { return total < o.total; }
+};
+ChangeTexels change_texels(const FrameStats& s) {
+  return ChangeTexels{s.texels, s.indirect_texels};
+}
+ChangeTexels median(std::vector<ChangeTexels> v) {
+  if (v.empty()) return ChangeTexels();
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+nlohmann::ordered_json change_json(double ms, const ChangeTexels& t) {
+  return {{"ms", ms},
+          {"texels", t.total},
+          {"light_map_texels", t.total - t.indirect},
+          {"indirect_map_texels", t.indirect}};
 }
 
 // Runs update(kUnlimited) until idle; returns milliseconds including glFinish.
@@ -119,20 +139,20 @@ int verb_bench(Args& args) {
   // Incremental light change (intensity x0.5 and back) and object toggle.
   // Texels of the median change: a change that tips the drift bound also runs a rebuild in its
   // frame (planner.h), which the maximum would report as the change's cost.
-  std::vector<double> light_texel_runs, object_texel_runs;
+  std::vector<ChangeTexels> light_texel_runs, object_texel_runs;
   if (rt.light_count() > 0) {
     const float authored = rt.light(0).intensity;
     for (int i = 0; i < kRepeats; ++i) {
       check(rt.set_light_intensity(0, i % 2 ? authored : authored * 0.5f), "set light");
       light_ms.push_back(timed_settle(rt));
-      light_texel_runs.push_back(double(rt.stats().texels));
+      light_texel_runs.push_back(change_texels(rt.stats()));
     }
   }
   if (rt.object_count() > 0) {
     for (int i = 0; i < kRepeats; ++i) {
       check(rt.set_object_visible(0, !rt.object_visible(0)), "toggle object");
       object_ms.push_back(timed_settle(rt));
-      object_texel_runs.push_back(double(rt.stats().texels));
+      object_texel_runs.push_back(change_texels(rt.stats()));
     }
     if (!rt.object_visible(0)) check(rt.set_object_visible(0, true), "toggle object");
     timed_settle(rt);
@@ -168,14 +188,15 @@ int verb_bench(Args& args) {
 
   const RuntimeMemory mem = rt.memory();
   const double rebuild = median(rebuild_ms), floor = median(floor_ms);
-  const uint64_t light_texels = light_texel_runs.empty() ? 0 : uint64_t(median(light_texel_runs));
-  const uint64_t object_texels =
-      object_texel_runs.empty() ? 0 : uint64_t(median(object_texel_runs));
+  const ChangeTexels light_texels = median(light_texel_runs);
+  const ChangeTexels object_texels = median(object_texel_runs);
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   nlohmann::ordered_json j;
   j["pack"] = path;
   j["renderer"] = renderer ? renderer : "";
   j["lightmap"] = {rt.width(), rt.height()};
+  j["indirect_map"] = {rt.indirect_width(), rt.indirect_height()};
+  j["indirect_scale"] = rt.indirect_scale();
   j["path"] = path_name(rt.path());
   j["accumulator_rounding"] = {{"unit_roundoff", rt.precision().unit_roundoff},
                                {"truncates", rt.precision().truncates}};
@@ -184,10 +205,8 @@ int verb_bench(Args& args) {
   j["full_rebuild"] = {{"ms", rebuild}, {"texels", rebuild_texels}, {"draws", rebuild_draws}};
   j["fill_floor"] = {{"ms", floor}, {"texels", rebuild_texels}};
   j["rebuild_to_floor_ratio"] = floor > 0 ? rebuild / floor : 0.0;
-  if (!light_ms.empty()) j["light_change"] = {{"ms", median(light_ms)}, {"texels", light_texels}};
-  if (!object_ms.empty()) {
-    j["object_toggle"] = {{"ms", median(object_ms)}, {"texels", object_texels}};
-  }
+  if (!light_ms.empty()) j["light_change"] = change_json(median(light_ms), light_texels);
+  if (!object_ms.empty()) j["object_toggle"] = change_json(median(object_ms), object_texels);
   nlohmann::ordered_json jb = nlohmann::ordered_json::array();
   for (const BudgetRun& r : runs) {
     jb.push_back({{"budget_texels", r.budget},
@@ -202,6 +221,8 @@ int verb_bench(Args& args) {
   j["gpu_memory_bytes"] = {{"atlases", mem.atlases},
                            {"light_map", mem.light_map},
                            {"accumulator", mem.accumulator},
+                           {"indirect_map", mem.indirect_map},
+                           {"indirect_accumulator", mem.indirect_accumulator},
                            {"vertex_buffer", mem.vertex_buffer},
                            {"index_buffer", mem.index_buffer}};
   if (json) {
@@ -211,20 +232,24 @@ int verb_bench(Args& args) {
   std::printf("pack %s on %s, light map %ux%u, %u patches in %u groups\n", path.c_str(),
               renderer ? renderer : "?", rt.width(), rt.height(), pack.patch_count(),
               pack.group_count());
+  if (pack.has_indirect_map()) {
+    std::printf("indirect map %ux%u (1/%u per axis)\n", rt.indirect_width(), rt.indirect_height(),
+                rt.indirect_scale());
+  }
   std::printf("path %s, accumulator unit roundoff %g%s\n", path_name(rt.path()),
               double(rt.precision().unit_roundoff), rt.precision().truncates ? " (truncates)" : "");
   std::printf("full rebuild     %8.3f ms  (%llu texels, %u draws)\n", rebuild,
               static_cast<unsigned long long>(rebuild_texels), rebuild_draws);
   std::printf("fill-rate floor  %8.3f ms  (same texels, full-target passes): ratio %.2fx\n", floor,
               floor > 0 ? rebuild / floor : 0.0);
-  if (!light_ms.empty()) {
-    std::printf("light change     %8.3f ms  (%llu texels)\n", median(light_ms),
-                static_cast<unsigned long long>(light_texels));
-  }
-  if (!object_ms.empty()) {
-    std::printf("object toggle    %8.3f ms  (%llu texels)\n", median(object_ms),
-                static_cast<unsigned long long>(object_texels));
-  }
+  auto print_change = [](const char* what, double ms, const ChangeTexels& t) {
+    std::printf("%-16s %8.3f ms  (%llu texels: %llu light map, %llu indirect map)\n", what, ms,
+                static_cast<unsigned long long>(t.total),
+                static_cast<unsigned long long>(t.total - t.indirect),
+                static_cast<unsigned long long>(t.indirect));
+  };
+  if (!light_ms.empty()) print_change("light change", median(light_ms), light_texels);
+  if (!object_ms.empty()) print_change("object toggle", median(object_ms), object_texels);
   std::printf(
       "budget (texels)  rebuild frames  light frames  toggle frames  max frame ms  mean ms\n");
   for (const BudgetRun& r : runs) {
@@ -233,10 +258,12 @@ int verb_bench(Args& args) {
                 r.object_toggle_frames, r.max_frame_ms, r.mean_frame_ms);
   }
   std::printf(
-      "GPU memory: atlases %llu B, light map %llu B, accumulator %llu B, vertices %llu B, "
-      "indices %llu B\n",
+      "GPU memory: atlases %llu B, light map %llu B, accumulator %llu B, indirect map %llu B, "
+      "indirect accumulator %llu B, vertices %llu B, indices %llu B\n",
       static_cast<unsigned long long>(mem.atlases), static_cast<unsigned long long>(mem.light_map),
       static_cast<unsigned long long>(mem.accumulator),
+      static_cast<unsigned long long>(mem.indirect_map),
+      static_cast<unsigned long long>(mem.indirect_accumulator),
       static_cast<unsigned long long>(mem.vertex_buffer),
       static_cast<unsigned long long>(mem.index_buffer));
   return 0;

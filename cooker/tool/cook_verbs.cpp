@@ -75,9 +75,12 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
     }
   }
   o.bake.gather_rays = args.int_option("--gather-rays", 0, 1, 65536);
-  o.bake.indirect_level = args.int_option("--indirect-level", 0, 1, 8);
-  if (o.bake.indirect_level != 0 && (o.bake.indirect_level & (o.bake.indirect_level - 1)) != 0)
-    throw ArgsError("--indirect-level must be 1, 2, 4 or 8");
+  std::string scale;
+  if (args.option("--indirect-scale", &scale) && scale != "auto") {
+    if (scale != "1" && scale != "2" && scale != "4" && scale != "8")
+      throw ArgsError("--indirect-scale must be auto, 1, 2, 4 or 8, not '" + scale + "'");
+    o.bake.indirect_scale = std::stoi(scale);
+  }
   o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
   o.bake.texel_samples = args.int_option("--texel-samples", 0, 1, 256);
@@ -86,6 +89,8 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.bake.plan_effects = !args.flag("--no-plan");
   o.bake.output_step = args.float_option("--output-step", 0.0f, 1e-30f, 1e30f);
   o.quiet = args.flag("--quiet", "-q");
+  o.layout.align = layout_align(o.bake);
+  o.layout.align_required = o.bake.indirect_scale > 0;
   return o;
 }
 

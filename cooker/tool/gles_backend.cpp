@@ -1,5 +1,6 @@
 // `recompose --backend gles`: the runtime on an EGL surfaceless context, driven like a game would
-// (state differences pushed as changes, update() until idle), then the light map read back.
+// (state differences pushed as changes, update() until idle), then the light map read back (and
+// the indirect map, added to it magnified on the CPU by indirect_map.h: the CPU recomposer's sum).
 // Orientation: the runtime keeps texture row 0 = image top row (glTF v = 0), so glReadPixels'
 // first row is the top row and the returned array needs no flip.
 #include "gles_backend.h"
@@ -10,6 +11,7 @@
 
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/half_float.h"
+#include "lightpatch/indirect_map.h"
 #include "lightpatch/platform/egl_context.h"
 #include "lightpatch/runtime.h"
 #include "lightpatch/scene_state.h"
@@ -22,13 +24,18 @@ using cooker::CookError;
 
 constexpr uint64_t kUnlimited = ~0ull >> 1;
 
-void settle(Runtime& runtime) {
+// Returns the texels written, by target.
+TargetTexels settle(Runtime& runtime) {
   // Each update() with an unlimited budget finishes a rebuild or applies every pending change;
   // a drift-triggered rebuild may need one more.
+  TargetTexels written;
   for (int i = 0; i < 64 && !runtime.idle(); ++i) {
     if (runtime.update(kUnlimited) != Status::kOk) throw CookError("GLES backend: GL error");
+    written.light_map += runtime.stats().texels - runtime.stats().indirect_texels;
+    written.indirect_map += runtime.stats().indirect_texels;
   }
   if (!runtime.idle()) throw CookError("GLES backend: the runtime did not settle");
+  return written;
 }
 
 void push(const PackView& pack, const SceneState& state, Runtime& runtime) {
@@ -63,7 +70,7 @@ void push(const PackView& pack, const SceneState& state, Runtime& runtime) {
 }  // namespace
 
 void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& states,
-                    std::vector<float>* rgb) {
+                    std::vector<float>* rgb, std::vector<TargetTexels>* costs) {
   char message[256] = {};
   platform::EglContext context;
   if (!context.create_headless(message, sizeof message)) {
@@ -77,15 +84,23 @@ void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& 
   }
   SceneState state;
   if (state.init(pack, &error) != Status::kOk) throw CookError(error.message);
-  settle(runtime);  // the initial full build of the authored state
+  std::vector<TargetTexels> written(1, settle(runtime));  // the authored state's full build
   for (const cooker::StateSpec& spec : states) {
     apply_state(spec, pack, &state);
     push(pack, state, runtime);
-    settle(runtime);
+    written.push_back(settle(runtime));
   }
+  if (costs) *costs = std::move(written);
   const size_t texels = size_t(runtime.width()) * runtime.height();
   std::vector<float> rgba(texels * 4);
   if (runtime.read_light_map(rgba.data(), &error) != Status::kOk) throw CookError(error.message);
+  if (pack.has_indirect_map()) {  // L + I, as the game samples it
+    std::vector<float> indirect(size_t(runtime.indirect_width()) * runtime.indirect_height() * 4);
+    if (runtime.read_indirect_map(indirect.data(), &error) != Status::kOk)
+      throw CookError(error.message);
+    add_magnified_indirect(indirect.data(), 4, runtime.indirect_width(), runtime.indirect_height(),
+                           runtime.indirect_scale(), rgba.data(), 4);
+  }
   rgb->resize(texels * 3);
   for (size_t i = 0; i < texels; ++i) {
     for (int c = 0; c < 3; ++c) (*rgb)[i * 3 + c] = rgba[i * 4 + c];

@@ -36,8 +36,13 @@ constexpr const char* kCookOptionsHelp =
     "                         denoiser\n"
     "  --gather-rays N        rays per coarse texel (preset: draft 64, preview 256, production\n"
     "                         1024)\n"
-    "  --indirect-level K     bounce light computed on K x K texel blocks: 1, 2, 4 or 8 (preset:\n"
-    "                         draft 4, preview 2, production 2)\n"
+    "  --indirect-scale K     auto | 1 | 2 | 4 | 8: bounce light computed on K x K texel blocks,\n"
+    "                         and every map stored as an indirect map at 1/K of the light map's\n"
+    "                         resolution (its smooth part) plus light-map patches where it is not\n"
+    "                         smooth (1: light map only); charts are laid out on whole blocks.\n"
+    "                         auto: 2 (bounce light gathered on the preset's blocks: draft 4,\n"
+    "                         preview 2, production 2), lowered to 1 if the charts do not fit\n"
+    "                         the page; 1 with --no-indirect\n"
     "  --denoise N            a-trous denoising passes over the bounce light, 0 = none (preset:\n"
     "                         draft 2, preview 2, production 1)\n"
     "  --no-plan              force every effect on: bounce light for every light group with\n"
@@ -207,7 +212,7 @@ const Verb kVerbs[] = {
      "cook SCENE -o OUT.lpk [--lightmap-size N] [--texels-per-unit F] "
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
-     "[--gather-rays N] [--indirect-level K] [--denoise N] [--area-samples N] [--texel-samples N] "
+     "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
      "[--output-step E] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},

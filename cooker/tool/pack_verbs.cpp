@@ -147,12 +147,15 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
 }
 
 // The light map after `states` (none: the authored state), on the CPU reference or GLES.
+// What a game samples (the light map, plus the indirect map magnified where the pack has one).
+// `costs` (optional): the texels written by target, the first build then each state's change.
 cooker::FloatImage recomposed(const PackView& view, const std::vector<cooker::StateSpec>& states,
-                              bool gles) {
+                              bool gles, std::vector<TargetTexels>* costs = nullptr) {
   cooker::FloatImage map(int(view.lightmap_width()), int(view.lightmap_height()), 3);
+  std::vector<TargetTexels> written;
   if (gles) {
     std::vector<float> rgb;
-    recompose_gles(view, states, &rgb);
+    recompose_gles(view, states, &rgb, &written);
     if (rgb.size() != map.data.size())
       throw CookError("GLES backend returned a map of the wrong size");
     map.data = std::move(rgb);
@@ -165,18 +168,25 @@ cooker::FloatImage recomposed(const PackView& view, const std::vector<cooker::St
     }
     // Every state is relative to the authored one (DESIGN.md, Scene state); the first full build
     // is of the authored state, then each state goes through the incremental path.
+    auto cost = [&recomposer]() {
+      const CpuRecomposer::Stats& s = recomposer.stats();
+      return TargetTexels{s.texels_drawn - s.indirect_texels_drawn, s.indirect_texels_drawn};
+    };
     recomposer.rebuild(state);
+    written.push_back(cost());
     for (const cooker::StateSpec& spec : states) {
       state.reset_to_authored(view);
       apply_state(spec, view, &state);
       if (recomposer.apply(state) != Status::kOk)
         throw CookError("recompose: state does not match the pack");
+      written.push_back(cost());
     }
     std::copy(recomposer.rgb(), recomposer.rgb() + map.data.size(), map.data.begin());
   }
   for (float v : map.data) {
     if (!std::isfinite(v)) throw CookError("recompose: the light map has a non-finite texel");
   }
+  if (costs) *costs = std::move(written);
   return map;
 }
 
@@ -271,8 +281,26 @@ int verb_recompose(Args& args) {
   OpenPack pack(path);
   const PackView& view = pack.view;
 
-  const cooker::FloatImage map = recomposed(view, states, backend == "gles");
+  std::vector<TargetTexels> costs;
+  const cooker::FloatImage map = recomposed(view, states, backend == "gles", &costs);
   cooker::write_pfm(output, map);
+  // What each step wrote, by target (the cost a game's budget pays, in each map's own texels).
+  if (view.has_indirect_map()) {
+    std::printf("indirect map %ux%u (1/%u of the light map per axis)\n", view.indirect_width(),
+                view.indirect_height(), view.indirect_scale());
+  }
+  for (size_t i = 0; i < costs.size(); ++i) {
+    char step[32];
+    if (i == 0) {
+      std::snprintf(step, sizeof step, "first build");
+    } else {
+      std::snprintf(step, sizeof step, "state %zu", i);
+    }
+    std::printf("%-12s %llu texels written: %llu light map, %llu indirect map\n", step,
+                static_cast<unsigned long long>(costs[i].total()),
+                static_cast<unsigned long long>(costs[i].light_map),
+                static_cast<unsigned long long>(costs[i].indirect_map));
+  }
   return 0;
 }
 

@@ -102,7 +102,7 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
   const Csv csv = read_csv(dir.file("acc.csv"));
   EXPECT_FALSE(csv.notes.empty());
   for (const char* column :
-       {"setting", "knob", "quality", "gather_rays", "indirect_level", "denoise", "area_samples",
+       {"setting", "knob", "quality", "gather_rays", "indirect_scale", "denoise", "area_samples",
         "lightmap_size", "encoding", "cook_s", "rays", "pack_bytes", "rel_rmse", "max_rel_error",
         "psnr_db", "pareto", "rel_rmse_excess", "within_noise"}) {
     EXPECT_NE(std::find(csv.header.begin(), csv.header.end(), column), csv.header.end()) << column;

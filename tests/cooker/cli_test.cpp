@@ -168,7 +168,7 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
   const ToolRun cook = expect_success({"cook", "--help"});
   for (const char* option :
        {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect", "--area-samples",
-        "--texel-samples", "--seed", "--integrator", "--gather-rays", "--indirect-level",
+        "--texel-samples", "--seed", "--integrator", "--gather-rays", "--indirect-scale",
         "--denoise", "--threads", "--report", "--quiet", "--no-plan", "--measure-plan"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
@@ -247,7 +247,7 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
   EXPECT_EQ(nlohmann::json::parse(read_bytes(dir.file("direct.json")))["indirect"]["enabled"],
             false);
   expect_success(
-      cat({"cook", scene, "-o", dir.file("a.lpk"), "--gather-rays", "48", "--indirect-level", "2",
+      cat({"cook", scene, "-o", dir.file("a.lpk"), "--gather-rays", "48", "--indirect-scale", "2",
            "--denoise", "1", "--seed", "7", "--threads", "1", "--report", dir.file("a.json")},
           kFast));
   const nlohmann::json a = nlohmann::json::parse(read_bytes(dir.file("a.json")));
@@ -258,16 +258,16 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
   EXPECT_EQ(a["indirect"]["denoise_passes"], 1);
   // One thread or all cores: the same pack.
   expect_success(cat({"cook", scene, "-o", dir.file("b.lpk"), "--gather-rays", "48",
-                      "--indirect-level", "2", "--denoise", "1", "--seed", "7"},
+                      "--indirect-scale", "2", "--denoise", "1", "--seed", "7"},
                      kFast));
   EXPECT_TRUE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("b.lpk")));
   // Another seed: other rays, another pack.
   expect_success(cat({"cook", scene, "-o", dir.file("c.lpk"), "--gather-rays", "48",
-                      "--indirect-level", "2", "--denoise", "1", "--seed", "8"},
+                      "--indirect-scale", "2", "--denoise", "1", "--seed", "8"},
                      kFast));
   EXPECT_FALSE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("c.lpk")));
-  expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--indirect-level", "3"}, kFast),
-                 "--indirect-level", "");
+  expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--indirect-scale", "3"}, kFast),
+                 "--indirect-scale", "");
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--integrator", "vpl"}, kFast),
                  "integrator", "");
   const std::string out = dir.file("out.lpk");

@@ -50,7 +50,7 @@ FurnaceResult furnace(float rho, const BakeOptions& o, int n, bool semi = false)
 TEST(Indirect, FurnaceConservesEnergy) {
   BakeOptions o;
   o.quality = Quality::kDraft;
-  o.indirect_level = 2;
+  o.indirect_scale = 2;
   for (bool semi : {false, true}) {
     const FurnaceResult r = furnace(0.5f, o, 12, semi);
     const double expected = 4.0 * kPi / (1.0 - 0.5);

@@ -32,14 +32,25 @@ FloatImage corner_map(int channels, float scale) {
   return m;
 }
 
+// An indirect part: the block image of a layout with 2 x 2 blocks (kW / 2 x kH / 2, 3 channels).
+constexpr int kBlocksW = kW / 2, kBlocksH = kH / 2;
+FloatImage block_image(float scale) {
+  FloatImage m(kBlocksW, kBlocksH, 3);
+  for (int y = 0; y < kBlocksH; ++y)
+    for (int x = 1; x < kBlocksW; ++x)
+      for (int c = 0; c < 3; ++c) m.at(x, y, c) = scale * float(1 + x + 10 * y + 100 * c);
+  return m;
+}
+
 GroupBake light_group() {
   GroupBake g;
   g.group = 2;
   g.seconds = 1.5;
   g.map = corner_map(3, 0.5f);
-  g.shadows.push_back({1, 0, corner_map(1, 0.01f)});
-  g.shadows.push_back({1, 3, FloatImage(kW, kH, 3)});  // all zero: an empty rectangle
-  g.pair_corrections.push_back({1, 0, 3, corner_map(3, -0.02f)});
+  g.indirect = block_image(0.25f);
+  g.shadows.push_back({1, 0, corner_map(1, 0.01f), {}});
+  g.shadows.push_back({1, 3, FloatImage(kW, kH, 3), block_image(-0.5f)});  // map all zero
+  g.pair_corrections.push_back({1, 0, 3, corner_map(3, -0.02f), {}});
   Decision d;
   d.kind = DecisionKind::kOverlap;
   d.stage = DecisionStage::kTraced;
@@ -64,6 +75,8 @@ GroupFileExpect expect_for(const GroupBake& g) {
   e.group = g.group;
   e.width = kW;
   e.height = kH;
+  e.indirect_width = kBlocksW;
+  e.indirect_height = kBlocksH;
   e.objects = 4;
   e.lights = 6;
   e.max_maps = 8;
@@ -89,6 +102,14 @@ void reseal(std::vector<uint8_t>& f) {
   std::memcpy(f.data(), &h, sizeof h);
 }
 
+// The offset after the record at `at` and its mask and values.
+size_t after_record(const std::vector<uint8_t>& f, size_t at) {
+  MapRecord r;
+  std::memcpy(&r, f.data() + at, sizeof r);
+  const size_t n = size_t(r.rect_w) * r.rect_h * r.channels;
+  return at + sizeof r + (n + 7) / 8 + r.nonzero * sizeof(float);
+}
+
 std::string refusal(const std::vector<uint8_t>& f, const GroupFileExpect& e) {
   try {
     decode_group(f.data(), f.size(), e);
@@ -105,12 +126,16 @@ TEST(GroupFile, LightGroupRoundTripsBitForBit) {
   EXPECT_EQ(back.group, g.group);
   EXPECT_EQ(back.seconds, g.seconds);
   expect_same_bits(back.map, g.map);
+  expect_same_bits(back.indirect, g.indirect);
   ASSERT_EQ(back.shadows.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
     EXPECT_EQ(back.shadows[i].light, g.shadows[i].light);
     EXPECT_EQ(back.shadows[i].object, g.shadows[i].object);
     expect_same_bits(back.shadows[i].map, g.shadows[i].map);
+    expect_same_bits(back.shadows[i].indirect, g.shadows[i].indirect);
   }
+  EXPECT_TRUE(back.shadows[0].indirect.data.empty());
+  EXPECT_TRUE(back.pair_corrections[0].indirect.data.empty());
   ASSERT_EQ(back.pair_corrections.size(), 1u);
   EXPECT_EQ(back.pair_corrections[0].object_a, 0);
   EXPECT_EQ(back.pair_corrections[0].object_b, 3);
@@ -140,13 +165,25 @@ TEST(GroupFile, StaticGroupRoundTrips) {
   GroupBake g;
   g.group = 0;
   g.map = corner_map(3, 2.0f);
-  g.static_shadows.push_back({2, corner_map(3, 0.1f)});
+  g.static_shadows.push_back({2, corner_map(3, 0.1f), block_image(1.0f)});
   const std::vector<uint8_t> f = encode_group(g, kHash);
   const GroupBake back = decode_group(f.data(), f.size(), expect_for(g));
   ASSERT_EQ(back.static_shadows.size(), 1u);
   EXPECT_EQ(back.static_shadows[0].object, 2);
   expect_same_bits(back.static_shadows[0].map, g.static_shadows[0].map);
+  expect_same_bits(back.static_shadows[0].indirect, g.static_shadows[0].indirect);
   expect_same_bits(back.map, g.map);
+}
+
+TEST(GroupFile, IndirectPartsOfAnotherBlockSizeAreRefused) {
+  const GroupBake g = light_group();
+  const std::vector<uint8_t> f = encode_group(g, kHash);
+  GroupFileExpect e = expect_for(g);
+  e.indirect_width = e.indirect_height = 0;  // a layout without blocks
+  EXPECT_NE(refusal(f, e).find("bad indirect flag"), std::string::npos) << refusal(f, e);
+  e = expect_for(g);
+  e.indirect_width = kBlocksW + 1;
+  EXPECT_NE(refusal(f, e).find("indirect part does not match"), std::string::npos) << refusal(f, e);
 }
 
 TEST(GroupFile, EveryTruncationIsRefused) {
@@ -200,13 +237,19 @@ TEST(GroupFile, CraftedFilesWithAValidChecksumAreRefusedByTheirContent) {
     EXPECT_NE(refusal(bad, e).find("map count"), std::string::npos);
   }
   {
-    // An object index out of range in the first shadow record.
+    // An object index out of range in the first shadow record (after the own map and its
+    // indirect part).
     std::vector<uint8_t> bad = f;
-    MapRecord own;
-    std::memcpy(&own, bad.data() + map0, sizeof own);
-    const size_t n = size_t(own.rect_w) * own.rect_h * own.channels;
-    const size_t shadow = map0 + sizeof own + (n + 7) / 8 + own.nonzero * sizeof(float);
+    const size_t part = after_record(bad, map0);
     MapRecord r;
+    std::memcpy(&r, bad.data() + part, sizeof r);
+    ASSERT_EQ(r.indirect, 2u);
+    r.light = 0;  // the part names another owner than its map
+    std::memcpy(bad.data() + part, &r, sizeof r);
+    reseal(bad);
+    EXPECT_NE(refusal(bad, e).find("indirect part does not match"), std::string::npos);
+    bad = f;
+    const size_t shadow = after_record(bad, part);
     std::memcpy(&r, bad.data() + shadow, sizeof r);
     ASSERT_EQ(r.role, 1u);
     r.object = 4;

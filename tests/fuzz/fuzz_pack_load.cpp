@@ -76,6 +76,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       recomposer.apply(state);
       const uint64_t n = uint64_t(recomposer.width()) * recomposer.height() * 3;
       if (n > 0) sum += recomposer.rgb()[n - 1] > 0.0f ? 1 : 0;
+      if (view.has_indirect_map()) {  // its last texel, in the map set after the light map
+        const uint64_t i = (view.map_texels() - view.map_offset(pack::kTargetIndirectMap)) * 3;
+        sum += recomposer.indirect_map()[i - 1] > 0.0f ? 1 : 0;
+      }
     }
   }
   volatile uint64_t sink = sum;

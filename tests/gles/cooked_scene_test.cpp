@@ -19,6 +19,7 @@
 #include "lightpatch/runtime.h"
 #include "lightpatch/scene_state.h"
 #include "runtime/map_reference.h"
+#include "sampled_maps.h"
 
 namespace lightpatch {
 namespace {
@@ -168,8 +169,7 @@ TEST_P(CookedScene, GlesRecomposeMatchesTheCpuReference) {
   Error error;
   ASSERT_TRUE(runtime.gpu_path());
   std::mt19937 rng(23 + GetParam());
-  const size_t n = size_t(runtime.width()) * runtime.height();
-  std::vector<float> rgba(n * 4);
+  const size_t n = size_t(c_.pack.map_texels());  // both maps where the pack has two
   for (int trial = 0; trial < 4; ++trial) {
     RandomState st;
     random_state(c_, rng, &st);
@@ -181,7 +181,7 @@ TEST_P(CookedScene, GlesRecomposeMatchesTheCpuReference) {
       ASSERT_EQ(runtime.update(~0ull >> 1), Status::kOk);
     ASSERT_TRUE(runtime.idle());
     ASSERT_EQ(cpu.rebuild(st.runtime), Status::kOk);
-    ASSERT_EQ(runtime.read_light_map(rgba.data(), &error), Status::kOk) << error.message;
+    const std::vector<float> rgb = testing::read_map_set(runtime, c_.pack);
     // The accumulator's rounding (a float target here) and one half-float rounding of the
     // presented value: eight half-float steps of the texel's magnitude, plus the runtime's own
     // relative bound for the incremental updates since its last rebuild.
@@ -190,7 +190,7 @@ TEST_P(CookedScene, GlesRecomposeMatchesTheCpuReference) {
     double worst = 0.0;
     for (size_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) {
-        const double want = cpu.rgb()[i * 3 + size_t(k)], got = rgba[i * 4 + size_t(k)];
+        const double want = cpu.presented_maps()[i * 3 + size_t(k)], got = rgb[i * 3 + size_t(k)];
         const double tol =
             (8.0 / 2048.0 + runtime.stats().error_bound) * magnitude[i * 3 + size_t(k)] + 1e-6;
         worst = std::max(worst, std::fabs(got - want) / tol);
@@ -226,8 +226,7 @@ TEST(NegativeLight, NoNegativeTexelInAnyRecomposition) {
   Error error;
   SceneState st;
   ASSERT_EQ(st.init(c.pack, &error), Status::kOk);
-  const size_t n = size_t(runtime.width()) * runtime.height();
-  std::vector<float> rgba(n * 4);
+  const size_t n = size_t(c.pack.map_texels());  // both maps where the pack has two
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   double raw_min = 0.0, floor_peak = 0.0;
@@ -247,17 +246,15 @@ TEST(NegativeLight, NoNegativeTexelInAnyRecomposition) {
     ASSERT_EQ(cpu.apply(st), Status::kOk);
     for (int frame = 0; frame < 100 && !runtime.idle(); ++frame)
       ASSERT_EQ(runtime.update(~0ull >> 1), Status::kOk);
-    ASSERT_EQ(runtime.read_light_map(rgba.data(), &error), Status::kOk) << error.message;
+    const std::vector<float> rgb = testing::read_map_set(runtime, c.pack);
     const std::vector<double> raw =
         testing::reference_map(c.pack, testing::wanted_state(runtime.planner(), c.pack));
     for (size_t i = 0; i < n * 3; ++i) {
       raw_min = std::min(raw_min, raw[i]);
       floor_peak = std::max(floor_peak, raw[i]);
-      ASSERT_GE(cpu.rgb()[i], 0.0f) << "cpu, trial " << trial << ", value " << i;
+      ASSERT_GE(cpu.presented_maps()[i], 0.0f) << "cpu, trial " << trial << ", value " << i;
+      ASSERT_GE(rgb[i], 0.0f) << "gles, trial " << trial << ", value " << i;
     }
-    for (size_t i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k)
-        ASSERT_GE(rgba[i * 4 + size_t(k)], 0.0f) << "gles, trial " << trial << ", texel " << i;
   }
   std::printf("unclamped minimum %.3g where the floor peaks at %.4g\n", raw_min, floor_peak);
   // The case the clamp is for exists in this scene (well beyond float rounding of the sum).
@@ -281,8 +278,6 @@ TEST(OverlappingShadows, FourVisibilityCombinationsMatchBakeStateOnCpuAndGles) {
   Runtime& runtime = r.runtime;
   CpuRecomposer& cpu = r.cpu;
   Error error;
-  const size_t n = size_t(runtime.width()) * runtime.height();
-  std::vector<float> rgba(n * 4), rgb(n * 3);
   for (int combo = 0; combo < 4; ++combo) {
     SceneState st;
     ASSERT_EQ(st.init(c.pack, &error), Status::kOk);
@@ -297,9 +292,7 @@ TEST(OverlappingShadows, FourVisibilityCombinationsMatchBakeStateOnCpuAndGles) {
     ASSERT_EQ(cpu.rebuild(st), Status::kOk);
     for (int frame = 0; frame < 1000 && !runtime.idle(); ++frame)
       ASSERT_EQ(runtime.update(~0ull >> 1), Status::kOk);
-    ASSERT_EQ(runtime.read_light_map(rgba.data(), &error), Status::kOk) << error.message;
-    for (size_t i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k) rgb[i * 3 + size_t(k)] = rgba[i * 4 + size_t(k)];
+    const std::vector<float> rgb = testing::read_sampled(runtime, c.pack);  // L + I
     Progress progress(true);
     Report report;
     FloatImage want =

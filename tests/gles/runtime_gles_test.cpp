@@ -24,6 +24,7 @@
 #include "runtime/map_metrics.h"
 #include "runtime/map_reference.h"
 #include "runtime/synthetic_pack.h"
+#include "sampled_maps.h"
 
 namespace lightpatch {
 namespace {
@@ -66,17 +67,8 @@ class Gles : public ::testing::Test {
     }
     return frames;
   }
-  // The sampled map as RGB irradiance (drops alpha).
-  std::vector<float> read() {
-    std::vector<float> rgba(size_t(runtime_.width()) * runtime_.height() * 4);
-    Error error;
-    EXPECT_EQ(runtime_.read_light_map(rgba.data(), &error), Status::kOk) << error.message;
-    std::vector<float> rgb(rgba.size() / 4 * 3);
-    for (size_t i = 0; i < rgba.size() / 4; ++i) {
-      for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = rgba[i * 4 + c];
-    }
-    return rgb;
-  }
+  // The presented map set (sampled_maps.h), as the reference lays it out.
+  std::vector<float> read() { return testing::read_map_set(runtime_, pack_); }
   void random_change(std::mt19937& rng) {
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     if (pack_.object_count() > 0 && u(rng) < 0.4f) {
@@ -133,6 +125,25 @@ TEST_F(Gles, PathsAndTheRoundingProbe) {
   EXPECT_EQ(runtime_.memory().accumulator, 0u);
   EXPECT_EQ(runtime_.memory().atlases, 0u);
   EXPECT_GT(runtime_.memory().cpu_fallback, 0u);
+  EXPECT_EQ(runtime_.memory().indirect_map, 0u);
+  EXPECT_EQ(runtime_.indirect_map_texture(), 0u);
+
+  // An indirect map (48x40 / 4 = 12x10 texels): its own sampled map and accumulator, sized at
+  // open(); the CPU path holds both maps.
+  SyntheticOptions indirect;
+  indirect.indirect_scale = 4;
+  open(indirect);
+  const RuntimeMemory mi = runtime_.memory();
+  EXPECT_NE(runtime_.indirect_map_texture(), 0u);
+  EXPECT_EQ(runtime_.indirect_width(), 12u);
+  EXPECT_EQ(runtime_.indirect_height(), 10u);
+  EXPECT_EQ(mi.light_map, uint64_t(runtime_.width()) * runtime_.height() * 8);
+  EXPECT_EQ(mi.indirect_map, 12u * 10u * 8u);
+  EXPECT_EQ(mi.indirect_accumulator, 12u * 10u * 16u);
+  open(indirect, RecomposePath::kCpu);
+  EXPECT_EQ(runtime_.memory().indirect_accumulator, 0u);
+  EXPECT_EQ(runtime_.memory().indirect_map, 12u * 10u * 8u);
+  EXPECT_EQ(runtime_.memory().cpu_fallback, (48u * 40u + 12u * 10u) * (3 * 8u + 4 * 2u));
 }
 
 // Random states, every path, against the CPU reference recomposer: the float path and the CPU
@@ -152,6 +163,8 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
       o.max_patch = 6;
       o.patches_per_group = 12;
     }
+    const uint32_t scales[] = {0, 2, 8, 4};  // an indirect map at every scale but on seed 1
+    o.indirect_scale = scales[seed - 1];
     open(o, GetParam());
     if (seed == 4) {
       ASSERT_GT(pack_.atlas_count(), 8u);
@@ -183,7 +196,7 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
       const std::vector<float> got = read();
       std::vector<double> magnitude;
       wanted(&magnitude);
-      const std::vector<double> want(cpu.rgb(), cpu.rgb() + got.size());
+      const std::vector<double> want(cpu.presented_maps(), cpu.presented_maps() + got.size());
       EXPECT_LE(worst(got, want, magnitude, ulps, runtime_.stats().error_bound), 1.0)
           << "seed " << seed << " trial " << trial;
     }
@@ -199,56 +212,61 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
 class GlesExactPaths : public Gles, public ::testing::WithParamInterface<RecomposePath> {};
 
 TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
-  SyntheticOptions o;
-  o.seed = 21;
-  o.lights = 4;
-  o.objects = 4;
-  open(o, GetParam());
-  Error error;
-  SceneState state;
-  ASSERT_EQ(state.init(pack_, &error), Status::kOk);
-  CpuRecomposer cpu;
-  ASSERT_EQ(cpu.init(pack_, &error), Status::kOk);
-  settle(kUnlimited);
-  std::mt19937 rng(77);
-  std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  testing::MapMetrics worst_single;
-  for (int step = 1; step <= 300; ++step) {
-    if (u(rng) < 0.3f) {
-      const uint32_t ob = rng() % pack_.object_count();
-      const bool v = !state.object_visible(ob);
-      ASSERT_EQ(state.set_object_visible(ob, v), Status::kOk);
-      ASSERT_EQ(runtime_.set_object_visible(ob, v), Status::kOk);
-    } else {
-      const uint32_t l = rng() % pack_.light_count();
-      LightState s = state.light(l);
-      const float pick = u(rng);
-      if (pick < 0.35f) {
-        for (float& c : s.color) c = 0.1f + 0.9f * u(rng);
-      } else if (pick < 0.7f) {
-        s.intensity = 0.2f + 4.0f * u(rng);
-      } else {
-        s.on = !s.on;
-      }
-      ASSERT_EQ(state.set_light(l, s), Status::kOk);
-      ASSERT_EQ(runtime_.set_light(l, s), Status::kOk);
-    }
+  for (uint32_t scale : {0u, 4u}) {  // without and with an indirect map: L + magnified I
+    SyntheticOptions o;
+    o.seed = 21;
+    o.lights = 4;
+    o.objects = 4;
+    o.indirect_scale = scale;
+    open(o, GetParam());
+    Error error;
+    SceneState state;
+    ASSERT_EQ(state.init(pack_, &error), Status::kOk);
+    CpuRecomposer cpu;
+    ASSERT_EQ(cpu.init(pack_, &error), Status::kOk);
     settle(kUnlimited);
-    if (step > 20 && step < 300) continue;
-    ASSERT_EQ(cpu.rebuild(state), Status::kOk);
-    const std::vector<float> got = read();
-    const testing::MapMetrics m = testing::compare_maps(got.data(), cpu.rgb(), got.size());
-    EXPECT_LE(m.relative_rmse, 1e-3) << "state " << step;
-    EXPECT_LE(std::fabs(m.median_ratio - 1.0), 5e-4) << "state " << step;
-    EXPECT_GE(m.min_value, 0.0);
-    worst_single.relative_rmse = std::max(worst_single.relative_rmse, m.relative_rmse);
-    if (step == 300) {
-      std::printf("%s after 300 states: relative RMSE %.4f %%, median %.6f, 1st percentile %.5f\n",
-                  path_name(GetParam()), 100.0 * m.relative_rmse, m.median_ratio, m.p1_ratio);
+    std::mt19937 rng(77);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    testing::MapMetrics worst_single;
+    for (int step = 1; step <= 300; ++step) {
+      if (u(rng) < 0.3f) {
+        const uint32_t ob = rng() % pack_.object_count();
+        const bool v = !state.object_visible(ob);
+        ASSERT_EQ(state.set_object_visible(ob, v), Status::kOk);
+        ASSERT_EQ(runtime_.set_object_visible(ob, v), Status::kOk);
+      } else {
+        const uint32_t l = rng() % pack_.light_count();
+        LightState s = state.light(l);
+        const float pick = u(rng);
+        if (pick < 0.35f) {
+          for (float& c : s.color) c = 0.1f + 0.9f * u(rng);
+        } else if (pick < 0.7f) {
+          s.intensity = 0.2f + 4.0f * u(rng);
+        } else {
+          s.on = !s.on;
+        }
+        ASSERT_EQ(state.set_light(l, s), Status::kOk);
+        ASSERT_EQ(runtime_.set_light(l, s), Status::kOk);
+      }
+      settle(kUnlimited);
+      if (step > 20 && step < 300) continue;
+      ASSERT_EQ(cpu.rebuild(state), Status::kOk);
+      const std::vector<float> got = testing::sampled_from(read(), pack_);
+      const testing::MapMetrics m = testing::compare_maps(got.data(), cpu.rgb(), got.size());
+      EXPECT_LE(m.relative_rmse, 1e-3) << "state " << step << " scale " << scale;
+      EXPECT_LE(std::fabs(m.median_ratio - 1.0), 5e-4) << "state " << step << " scale " << scale;
+      EXPECT_GE(m.min_value, 0.0);
+      worst_single.relative_rmse = std::max(worst_single.relative_rmse, m.relative_rmse);
+      if (step == 300) {
+        std::printf(
+            "%s, indirect scale %u, after 300 states: relative RMSE %.4f %%, median %.6f, 1st "
+            "percentile %.5f\n",
+            path_name(GetParam()), scale, 100.0 * m.relative_rmse, m.median_ratio, m.p1_ratio);
+      }
     }
+    std::printf("%s, indirect scale %u, worst single change: relative RMSE %.4f %%\n",
+                path_name(GetParam()), scale, 100.0 * worst_single.relative_rmse);
   }
-  std::printf("%s worst single change: relative RMSE %.4f %%\n", path_name(GetParam()),
-              100.0 * worst_single.relative_rmse);
 }
 
 // Sunlight: a pack whose lights are ~100,000 lux recomposes the same on every path (no clamp at
@@ -297,6 +315,7 @@ INSTANTIATE_TEST_SUITE_P(Paths, GlesExactPaths,
 TEST_F(Gles, BudgetNeverExceededAndNoPartialStateSampled) {
   SyntheticOptions o;
   o.seed = 11;
+  o.indirect_scale = 2;
   open(o);
   std::mt19937 rng(5);
   const uint64_t budgets[] = {60, 250, 900, 4000};
@@ -307,6 +326,7 @@ TEST_F(Gles, BudgetNeverExceededAndNoPartialStateSampled) {
     ASSERT_EQ(runtime_.update(budget), Status::kOk);
     const FrameStats& s = runtime_.stats();
     presents += s.presented;
+    ASSERT_LE(s.indirect_texels, s.texels);
     if (!s.oversize_steps) {
       ASSERT_LE(s.texels, budget);
     } else {
@@ -325,6 +345,7 @@ TEST_F(Gles, BudgetNeverExceededAndNoPartialStateSampled) {
 TEST_F(Gles, ChangesDuringARebuildAreNotLostAndLatencyIsBounded) {
   SyntheticOptions o;
   o.seed = 12;
+  o.indirect_scale = 4;
   open(o);
   const uint64_t budget = 300;
   std::mt19937 rng(8);
@@ -347,6 +368,7 @@ TEST_F(Gles, NoAllocationAndNoGlObjectCreationPerFrame) {
   for (RecomposePath path : {RecomposePath::kGpuFloat, RecomposePath::kCpu}) {
     SyntheticOptions o;
     o.seed = 13;
+    o.indirect_scale = 8;  // both targets' draws and uploads
     open(o, path);
     settle(kUnlimited);
     std::mt19937 rng(21);
@@ -408,6 +430,7 @@ TEST_F(Gles, NoDriftAfterTenThousandRandomChanges) {
   o.width = 32;
   o.height = 24;
   o.max_patch = 8;
+  o.indirect_scale = 4;
   open(o);
   settle(kUnlimited);
   std::mt19937 rng(1234);
@@ -432,6 +455,7 @@ TEST_F(Gles, NoDriftAfterTenThousandRandomChanges) {
 TEST_F(Gles, SurvivesContextLoss) {
   SyntheticOptions o;
   o.seed = 15;
+  o.indirect_scale = 2;
   open(o);
   std::mt19937 rng(3);
   for (int i = 0; i < 5; ++i) random_change(rng);
@@ -449,32 +473,39 @@ TEST_F(Gles, SurvivesContextLoss) {
   EXPECT_EQ(read(), before);
 }
 
-// The texture itself (not read_light_map) holds the presented map divided by the scale, as half
-// floats rounded to nearest, on the CPU path too.
+// The textures themselves (not read_light_map / read_indirect_map) hold the presented maps
+// divided by the scale, as half floats rounded to nearest, on the CPU path too.
 TEST_F(Gles, CpuPathUploadsTheRoundedPresentedMap) {
   SyntheticOptions o;
   o.seed = 16;
+  o.indirect_scale = 4;
   open(o, RecomposePath::kCpu);
   std::mt19937 rng(4);
   for (int i = 0; i < 6; ++i) random_change(rng);
   settle(400);
   std::vector<double> magnitude;
   const auto want = wanted(&magnitude);
-  std::vector<float> got(size_t(runtime_.width()) * runtime_.height() * 4);
-  GLuint fbo = 0;
-  glGenFramebuffers(1, &fbo);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
-                         runtime_.light_map_texture(), 0);
-  ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), GLenum(GL_FRAMEBUFFER_COMPLETE));
-  glReadPixels(0, 0, GLsizei(runtime_.width()), GLsizei(runtime_.height()), GL_RGBA, GL_FLOAT,
-               got.data());
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  glDeleteFramebuffers(1, &fbo);
-  for (size_t i = 0; i < got.size() / 4; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      const float v = got[i * 4 + c] * runtime_.light_map_scale();
-      EXPECT_EQ(v, testing::round_half(float(want[i * 3 + c]))) << "texel " << i;
+  for (uint8_t t : {pack::kTargetLightMap, pack::kTargetIndirectMap}) {
+    const uint32_t w = pack_.map_width(t), h = pack_.map_height(t);
+    std::vector<float> got(size_t(w) * h * 4);
+    GLuint fbo = 0;
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferTexture2D(
+        GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+        t == pack::kTargetLightMap ? runtime_.light_map_texture() : runtime_.indirect_map_texture(),
+        0);
+    ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), GLenum(GL_FRAMEBUFFER_COMPLETE));
+    glReadPixels(0, 0, GLsizei(w), GLsizei(h), GL_RGBA, GL_FLOAT, got.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDeleteFramebuffers(1, &fbo);
+    const double* map = want.data() + pack_.map_offset(t) * 3;
+    for (size_t i = 0; i < got.size() / 4; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        const float v = got[i * 4 + c] * runtime_.light_map_scale();
+        ASSERT_EQ(v, testing::round_half(float(map[i * 3 + c])))
+            << "target " << int(t) << " texel " << i;
+      }
     }
   }
 }

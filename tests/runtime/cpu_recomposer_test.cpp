@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -52,6 +53,7 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
     o.static_shadow_probability = 1.0f;
     o.width = 24;
     o.height = 20;
+    o.indirect_scale = seed == 1 ? 0 : 2 * (seed - 1);  // none, 1/2, 1/4 (a 6x5 indirect map)
     const testing::SyntheticPack bytes = make_synthetic_pack(o);
     PackView pack;
     Error error;
@@ -73,12 +75,90 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
       ASSERT_EQ(cpu.apply(state), Status::kOk);
       incremental |= !cpu.stats().rebuilt;
       if (i % 250 != 249) continue;
-      const std::vector<double> want = testing::presented(reference_map(pack, ref_of(state, pack)));
+      // Each presented map, and what a game samples: L + I magnified by the contract's formula.
+      const std::vector<double> maps = testing::presented(reference_map(pack, ref_of(state, pack)));
+      for (size_t t = 0; t < maps.size(); ++t) {
+        ASSERT_NEAR(cpu.presented_maps()[t], maps[t], 1e-4 * (1.0 + std::fabs(maps[t])))
+            << "map-set texel " << t / 3;
+      }
+      const std::vector<double> want = testing::sampled_reference(pack, maps);
       for (size_t t = 0; t < want.size(); ++t)
         ASSERT_NEAR(cpu.rgb()[t], want[t], 1e-4 * (1.0 + std::fabs(want[t]))) << "texel " << t / 3;
     }
     EXPECT_TRUE(incremental);
+    EXPECT_EQ(cpu.indirect_map() != nullptr, o.indirect_scale != 0);
   }
+}
+
+// A pack whose maps have a closed form: a 16x8 light map and a 4x2 indirect map (scale 4). The
+// base and the light's contribution each cover the light map with 0.2; the light's indirect patch
+// covers the indirect map with a ramp along x, 40 i / 255 at indirect column i. So a game samples
+//   L + I = 0.2 + 0.2 f + f (40 / 255) clamp((x + 0.5) / 4 - 0.5, 0, 3)
+// at light-map column x (every row alike): the ramp magnified bilinearly is the ramp, flat beyond
+// the outer texel centres.
+TEST(CpuRecomposer, APackWithAnIndirectMapRecomposesToItsClosedForm) {
+  SyntheticOptions o;
+  o.width = 16;
+  o.height = 8;
+  o.lights = 1;
+  o.objects = 0;
+  o.atlas_size = 32;
+  o.patches_per_group = 1;
+  o.indirect_scale = 4;
+  o.indirect_patches_per_group = 0;
+  o.bounce_covers_map = true;  // the contribution's one indirect patch: the whole indirect map
+  // Atlas rows 0..1: the ramp (columns 0..3); rows 16..23: 0.2 (51 / 255).
+  o.atlas_byte = [](uint32_t x, uint32_t y, uint32_t) {
+    return uint8_t(y < 16 ? 40 * std::min(x, 3u) : 51);
+  };
+  o.mutate = [](pack::Header&, std::vector<pack::PatchRecord>& patches) {
+    for (pack::PatchRecord& p : patches) {
+      const bool indirect = p.target == pack::kTargetIndirectMap;
+      p.atlas = 0;
+      p.atlas_x = 0;
+      p.atlas_y = indirect ? 0 : 16;
+      p.dest_x = p.dest_y = 0;
+      p.width = indirect ? 4 : 16;
+      p.height = indirect ? 2 : 8;
+      p.channel = 0;
+      p.channel_count = 1;
+      p.encoding = pack::kEncodingLinear;
+      p.scale = 1.0f;
+      p.flags = 0;
+    }
+  };
+  const testing::SyntheticPack bytes = make_synthetic_pack(o);
+  PackView pack;
+  Error error;
+  ASSERT_TRUE(bytes.open(&pack, &error)) << error.message;
+  ASSERT_EQ(pack.patch_count(), 3u);  // base, contribution, its indirect patch
+  SceneState state;
+  ASSERT_EQ(state.init(pack, &error), Status::kOk);
+  CpuRecomposer cpu;
+  ASSERT_EQ(cpu.init(pack, &error), Status::kOk);
+  const LightState light{true, {1.0f, 0.5f, 0.25f}, 2.0f};
+  ASSERT_EQ(state.set_light(0, light), Status::kOk);
+  ASSERT_EQ(cpu.rebuild(state), Status::kOk);
+  const double f[3] = {2.0, 1.0, 0.5};
+  for (uint32_t y = 0; y < 8; ++y) {
+    for (uint32_t x = 0; x < 16; ++x) {
+      const double u = std::min(std::max((x + 0.5) / 4.0 - 0.5, 0.0), 3.0);
+      for (int c = 0; c < 3; ++c) {
+        const double want = 0.2 + 0.2 * f[c] + f[c] * 40.0 / 255.0 * u;
+        ASSERT_NEAR(cpu.rgb()[(y * 16 + x) * 3 + c], want, 1e-6) << x << "," << y << " c " << c;
+        ASSERT_NEAR(cpu.light_map()[(y * 16 + x) * 3 + c], 0.2 + 0.2 * f[c], 1e-6);
+      }
+    }
+  }
+  for (uint32_t i = 0; i < 4 * 2; ++i) {
+    for (int c = 0; c < 3; ++c)
+      ASSERT_NEAR(cpu.indirect_map()[i * 3 + c], f[c] * 40.0 * (i % 4) / 255.0, 1e-6);
+  }
+  // The light off through the incremental path: the base alone.
+  ASSERT_EQ(state.set_light(0, LightState{false, {1.0f, 0.5f, 0.25f}, 2.0f}), Status::kOk);
+  ASSERT_EQ(cpu.apply(state), Status::kOk);
+  for (uint32_t t = 0; t < 16 * 8 * 3; ++t) ASSERT_NEAR(cpu.rgb()[t], 0.2, 1e-6);
+  EXPECT_GT(cpu.stats().indirect_texels_drawn, 0u);
 }
 
 TEST(CpuRecomposer, TenThousandIncrementalChangesEndEqualToARebuild) {

@@ -2,13 +2,15 @@
 // from scratch in double precision (every active group added once, with the rules of
 // group_rules.h and the drawing loop of patch_accumulate.h), per-texel magnitudes for rounding
 // tolerances, and a DrawSink that executes a plan on the CPU, rounding every texel a draw writes
-// like a half-float target (to nearest or toward zero) when asked to.
+// like a half-float target (to nearest or toward zero) when asked to. Maps are the pack's map set
+// (pack_view.h): the light map, then the indirect map where the pack has one.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -40,7 +42,7 @@ struct RefState {
 // every group of every light, drawn or not), an upper bound of the sum of |terms|.
 inline std::vector<double> reference_map(const PackView& pack, const RefState& s,
                                          std::vector<double>* magnitude = nullptr) {
-  const size_t n = size_t(pack.lightmap_width()) * pack.lightmap_height() * 3;
+  const size_t n = size_t(pack.map_texels()) * 3;
   std::vector<double> map(n, 0.0);
   if (magnitude) magnitude->assign(n, 0.0);
   for (uint32_t g = 0; g < pack.group_count(); ++g) {
@@ -64,76 +66,133 @@ inline std::vector<double> presented(std::vector<double> map) {
   return map;
 }
 
+// The indirect map at the centre of light-map texel (x, y), channel c, by the contract's formula
+// evaluated directly in double (pack_format.h, "Two target maps"; independent of indirect_map.h):
+// bilinear at ((x + 0.5) / s - 0.5, (y + 0.5) / s - 0.5), clamped to the edge texels. `map`: w x h
+// RGB texels.
+inline double contract_indirect_at(const double* map, uint32_t w, uint32_t h, uint32_t s,
+                                   uint32_t x, uint32_t y, int c) {
+  const double u = (x + 0.5) / s - 0.5, v = (y + 0.5) / s - 0.5;
+  const double u0 = std::floor(u), v0 = std::floor(v);
+  auto at = [&](double i, double j) {
+    const double ci = std::min(std::max(i, 0.0), double(w - 1));
+    const double cj = std::min(std::max(j, 0.0), double(h - 1));
+    return map[(size_t(cj) * w + size_t(ci)) * 3 + size_t(c)];
+  };
+  const double a = u - u0, b = v - v0;
+  return (1 - a) * (1 - b) * at(u0, v0) + a * (1 - b) * at(u0 + 1, v0) +
+         (1 - a) * b * at(u0, v0 + 1) + a * b * at(u0 + 1, v0 + 1);
+}
+
+// What a game samples from a map set (the light map, then the indirect map): L + I per light-map
+// texel, width * height * 3 values.
+inline std::vector<double> sampled_reference(const PackView& pack,
+                                             const std::vector<double>& maps) {
+  const uint32_t w = pack.lightmap_width(), h = pack.lightmap_height();
+  std::vector<double> out(maps.begin(), maps.begin() + std::ptrdiff_t(size_t(w) * h * 3));
+  if (!pack.has_indirect_map()) return out;
+  const double* indirect = maps.data() + pack.map_offset(pack::kTargetIndirectMap) * 3;
+  for (uint32_t y = 0; y < h; ++y) {
+    for (uint32_t x = 0; x < w; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        out[(size_t(y) * w + x) * 3 + size_t(c)] +=
+            contract_indirect_at(indirect, pack.indirect_width(), pack.indirect_height(),
+                                 pack.indirect_scale(), x, y, c);
+      }
+    }
+  }
+  return out;
+}
+
 enum class Rounding { kNone, kHalfNearest, kHalfTowardZero };
 
 // Executes a plan on an RGB float accumulator and an RGB presented map; records costs and steps.
 class CpuMapSink final : public DrawSink {
  public:
   CpuMapSink(const PackView& pack, Rounding rounding) : pack_(pack), rounding_(rounding) {
-    const size_t n = size_t(pack.lightmap_width()) * pack.lightmap_height() * 3;
+    const size_t n = size_t(pack.map_texels()) * 3;
     accumulator_.assign(n, 0.0f);
     presented_.assign(n, 0.0f);
   }
   void clear() override {
     std::fill(accumulator_.begin(), accumulator_.end(), 0.0f);
-    texels += uint64_t(pack_.lightmap_width()) * pack_.lightmap_height();
+    texels += pack_.map_texels();
+    indirect_texels += indirect_map_texels();
   }
   void draw(uint32_t group, uint32_t first, uint32_t count, const float factor[3]) override {
     EXPECT_GE(first, pack_.group(group).first_patch);
     EXPECT_LE(first + count, pack_.group(group).first_patch + pack_.group(group).patch_count);
+    check_one_target(first, count);
     if (rounding_ == Rounding::kNone) {
       add_patches(pack_, first, count, factor, accumulator_.data());
     } else {  // a half-float target rounds every texel a draw writes
-      const uint32_t w = pack_.lightmap_width();
       for (uint32_t p = first; p < first + count; ++p) {
         const pack::PatchRecord& pr = pack_.patch(p);
         scratch_.assign(accumulator_.size(), 0.0f);
         add_patches(pack_, p, 1, factor, scratch_.data());
-        for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
-          for (uint32_t x = pr.dest_x; x < uint32_t(pr.dest_x + pr.width); ++x) {
-            for (int c = 0; c < 3; ++c) {
-              float& v = accumulator_[(size_t(y) * w + x) * 3 + c];
-              v = round_half(v + scratch_[(size_t(y) * w + x) * 3 + c],
-                             rounding_ == Rounding::kHalfTowardZero);
-            }
+        for_each_texel(pr, [&](size_t i) {
+          for (int c = 0; c < 3; ++c) {
+            float& v = accumulator_[i * 3 + c];
+            v = round_half(v + scratch_[i * 3 + c], rounding_ == Rounding::kHalfTowardZero);
           }
-        }
+        });
       }
     }
-    for (uint32_t p = first; p < first + count; ++p) {
-      texels += uint64_t(pack_.patch(p).width) * pack_.patch(p).height;
-    }
+    count_texels(first, count);
     ++draws;
   }
   void present(uint32_t first, uint32_t count) override {
-    const uint32_t w = pack_.lightmap_width();
+    check_one_target(first, count);
     for (uint32_t p = first; p < first + count; ++p) {
-      const pack::PatchRecord& pr = pack_.patch(p);
-      for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
-        for (uint32_t x = pr.dest_x; x < uint32_t(pr.dest_x + pr.width); ++x) {
-          for (int c = 0; c < 3; ++c) {
-            const size_t i = (size_t(y) * w + x) * 3 + c;
-            presented_[i] = std::max(accumulator_[i], 0.0f);
-          }
-        }
-      }
-      texels += uint64_t(pr.width) * pr.height;
+      for_each_texel(pack_.patch(p), [&](size_t i) {
+        for (int c = 0; c < 3; ++c) presented_[i * 3 + c] = std::max(accumulator_[i * 3 + c], 0.0f);
+      });
     }
+    count_texels(first, count);
     ++presents;
   }
   void present_all() override {
     for (size_t i = 0; i < accumulator_.size(); ++i)
       presented_[i] = std::max(accumulator_[i], 0.0f);
-    texels += uint64_t(pack_.lightmap_width()) * pack_.lightmap_height();
+    texels += pack_.map_texels();
+    indirect_texels += indirect_map_texels();
     ++presents;
     ++whole_presents;
   }
+  // The presented map set.
   const std::vector<float>& sampled() const { return presented_; }
 
   uint64_t texels = 0;
+  uint64_t indirect_texels = 0;  // the part of `texels` written into the indirect map
   uint32_t draws = 0, presents = 0, whole_presents = 0;
 
  private:
+  uint64_t indirect_map_texels() const {
+    return uint64_t(pack_.indirect_width()) * pack_.indirect_height();
+  }
+  // Every step covers patches of one target.
+  void check_one_target(uint32_t first, uint32_t count) const {
+    for (uint32_t p = first; p < first + count; ++p)
+      EXPECT_EQ(pack_.patch(p).target, pack_.patch(first).target) << "patch " << p;
+  }
+  void count_texels(uint32_t first, uint32_t count) {
+    for (uint32_t p = first; p < first + count; ++p) {
+      const uint64_t area = uint64_t(pack_.patch(p).width) * pack_.patch(p).height;
+      texels += area;
+      if (pack_.patch(p).target == pack::kTargetIndirectMap) indirect_texels += area;
+    }
+  }
+  // Calls f(texel index in the map set) for every texel under the patch's destination.
+  template <typename F>
+  void for_each_texel(const pack::PatchRecord& pr, F&& f) const {
+    const uint32_t w = pack_.map_width(pr.target);
+    const size_t base = size_t(pack_.map_offset(pr.target));
+    for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
+      for (uint32_t x = pr.dest_x; x < uint32_t(pr.dest_x + pr.width); ++x)
+        f(base + size_t(y) * w + x);
+    }
+  }
+
   const PackView& pack_;
   Rounding rounding_;
   std::vector<float> accumulator_, presented_, scratch_;

@@ -88,16 +88,18 @@ TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
   for (uint32_t seed = 1; seed <= 4; ++seed) {
     SyntheticOptions o;
     o.seed = seed;
+    o.indirect_scale = seed == 1 ? 0 : 1u << (seed - 1);  // none, then 1/2, 1/4, 1/8
     Fixture f(o);
     std::mt19937 rng(seed);
     const uint64_t budgets[] = {50, 300, 1000, 5000};
     for (int frame = 0; frame < 400; ++frame) {
       if (rng() % 3 == 0) f.random_change(rng);
       const uint64_t budget = budgets[rng() % 4];
-      const uint64_t before = f.sink->texels;
+      const uint64_t before = f.sink->texels, indirect_before = f.sink->indirect_texels;
       f.planner.update(budget, *f.sink);
       const FrameStats& s = f.planner.stats();
-      ASSERT_EQ(f.sink->texels - before, s.texels);
+      ASSERT_EQ(f.sink->texels - before, s.texels);  // both targets, each in its own texels
+      ASSERT_EQ(f.sink->indirect_texels - indirect_before, s.indirect_texels);
       if (s.oversize_steps == 0) {
         ASSERT_LE(s.texels, budget) << "frame " << frame;
       } else {
@@ -155,6 +157,83 @@ TEST(Planner, SmallChangeIsIncrementalAndLandsInOneFrame) {
   EXPECT_EQ(f.sink->whole_presents, presents);
   const auto ref2 = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref2), 1e-4);
+}
+
+// With an indirect map, a change's cost is exact in the texels of each target it writes: an
+// indirect patch costs its own coarse texels, a group with patches in both maps is one draw and
+// one present per target, and the clear and the whole-map present cover both maps.
+TEST(Planner, CostsAreExactInTheTexelsOfEachTarget) {
+  SyntheticOptions o;
+  o.seed = 9;
+  o.indirect_scale = 4;  // 12x10 indirect texels under the 48x40 light map
+  o.indirect_patches_per_group = 3;
+  o.bounce_covers_map = true;  // every contribution also covers the whole indirect map
+  Fixture f(o);
+  const uint64_t maps = 48 * 40 + 12 * 10;
+  EXPECT_EQ(f.planner.clear_texels(), maps);
+  // Sums over the pack's records, target by target.
+  auto area = [&](uint32_t p) { return uint64_t(f.pack.patch(p).width) * f.pack.patch(p).height; };
+  uint64_t all = 0;
+  for (uint32_t p = 0; p < f.pack.patch_count(); ++p) all += area(p);
+  EXPECT_EQ(f.planner.rebuild_texels(), 2 * maps + all);  // every group active at first
+  f.settle(kUnlimited);
+
+  const uint32_t l = 1;
+  TargetTexels want;
+  uint32_t steps = 0;
+  for (uint32_t g = 0; g < f.pack.group_count(); ++g) {
+    const pack::GroupRecord& gr = f.pack.group(g);
+    if (gr.light != l) continue;  // every object is visible: all of the light's groups change
+    bool target_seen[2] = {false, false};
+    for (uint32_t p = gr.first_patch; p < gr.first_patch + gr.patch_count; ++p) {
+      const uint8_t t = f.pack.patch(p).target;
+      (t == pack::kTargetIndirectMap ? want.indirect_map : want.light_map) += 2 * area(p);
+      target_seen[t] = true;
+    }
+    EXPECT_EQ(f.planner.group_indirect_first(g) - gr.first_patch, [&] {
+      uint32_t n = 0;
+      for (uint32_t p = gr.first_patch; p < gr.first_patch + gr.patch_count; ++p)
+        n += f.pack.patch(p).target == pack::kTargetLightMap;
+      return n;
+    }());
+    steps += 2 * (uint32_t(target_seen[0]) + uint32_t(target_seen[1]));
+  }
+  ASSERT_GT(want.indirect_map, 0u);
+  const TargetTexels cost = f.planner.light_change_cost(l);
+  EXPECT_EQ(cost.light_map, want.light_map);
+  EXPECT_EQ(cost.indirect_map, want.indirect_map);
+  EXPECT_EQ(f.planner.light_change_texels(l), want.total());
+  const float c[3] = {0.3f, 0.6f, 0.9f};
+  ASSERT_EQ(f.planner.set_light(l, true, c, 2.0f), Status::kOk);
+  const uint64_t before = f.sink->indirect_texels;
+  f.planner.update(want.total(), *f.sink);  // exactly the change's cost fits
+  EXPECT_TRUE(f.planner.idle());
+  EXPECT_EQ(f.planner.stats().texels, want.total());
+  EXPECT_EQ(f.planner.stats().indirect_texels, want.indirect_map);
+  EXPECT_EQ(f.sink->indirect_texels - before, want.indirect_map);
+  EXPECT_EQ(f.planner.stats().draws, steps);
+  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+  EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
+
+  // An object toggle: the split of its groups, as predicted.
+  const TargetTexels toggle = f.planner.object_change_cost(0);
+  ASSERT_EQ(f.planner.set_object_visible(0, false), Status::kOk);
+  f.planner.update(toggle.total(), *f.sink);
+  EXPECT_TRUE(f.planner.idle());
+  EXPECT_EQ(f.planner.stats().texels, toggle.total());
+  EXPECT_EQ(f.planner.stats().indirect_texels, toggle.indirect_map);
+
+  // A full rebuild: both maps cleared and presented whole.
+  f.planner.request_rebuild();
+  const uint64_t rebuild = f.planner.rebuild_texels();
+  uint64_t texels = 0, indirect = 0;
+  while (!f.planner.idle()) {
+    f.planner.update(kUnlimited, *f.sink);
+    texels += f.planner.stats().texels;
+    indirect += f.planner.stats().indirect_texels;
+  }
+  EXPECT_EQ(texels, rebuild);
+  EXPECT_GE(indirect, 2u * 12u * 10u);
 }
 
 TEST(Planner, ChangesDuringARebuildAreNotLostAndLatencyIsBounded) {

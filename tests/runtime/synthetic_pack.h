@@ -2,8 +2,10 @@
 // needed, so the runtime's tests also run cross-compiled). Deterministic for a seed.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -24,6 +26,20 @@ struct SyntheticOptions {
   float static_shadow_probability = 0.5f;  // an object shadowing the static lights
   float intensity = 1.0f;  // multiplies the authored intensities (0.5..4); 1e5: sunlight
   uint32_t seed = 1;
+  // An indirect map at 1/indirect_scale of the light map per axis (0: none; 2, 4 or 8 dividing
+  // width and height): each group also gets 0..indirect_patches_per_group patches into it (after
+  // its light-map ones), of sides up to max_patch indirect texels (at most the map's).
+  uint32_t indirect_scale = 0;
+  uint32_t indirect_patches_per_group = 3;
+  // Bounce light that covers the whole room: every contribution group gets one more patch that
+  // covers its whole indirect map (or, without one, the whole light map). For cost comparisons.
+  bool bounce_covers_map = false;
+  // Edits the header and the patch records (not their count) before the table checksum is
+  // computed: corrupt packs that only the record validation can refuse.
+  std::function<void(pack::Header&, std::vector<pack::PatchRecord>&)> mutate;
+  // Atlas content by texel (x, y) and channel, the same in every atlas (default: random bytes):
+  // known values for closed-form expectations.
+  std::function<uint8_t(uint32_t x, uint32_t y, uint32_t channel)> atlas_byte;
 };
 
 // Pack bytes in 8-byte aligned storage.
@@ -97,14 +113,26 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   std::vector<std::vector<uint8_t>> atlases(1);
   const uint32_t as = o.atlas_size;
   uint32_t cx = 0, cy = 0, shelf = 0;
+  const uint32_t iw = o.indirect_scale ? o.width / o.indirect_scale : 0;
+  const uint32_t ih = o.indirect_scale ? o.height / o.indirect_scale : 0;
   for (size_t g = 0; g < groups.size(); ++g) {
     groups[g].first_patch = uint32_t(patches.size());
     const uint32_t n = integer(1, o.patches_per_group);
-    groups[g].patch_count = n;
-    for (uint32_t k = 0; k < n; ++k) {
+    const uint32_t m = o.indirect_scale ? integer(0, o.indirect_patches_per_group) : 0;
+    const bool cover = o.bounce_covers_map && groups[g].kind == kGroupContribution;
+    groups[g].patch_count = n + m + (cover ? 1 : 0);
+    for (uint32_t k = 0; k < groups[g].patch_count; ++k) {
       PatchRecord p{};
-      p.width = uint16_t(integer(1, o.max_patch));
-      p.height = uint16_t(integer(1, o.max_patch));
+      const bool coarse = k >= n && o.indirect_scale != 0;
+      const uint32_t map_w = coarse ? iw : o.width, map_h = coarse ? ih : o.height;
+      if (cover && k + 1 == groups[g].patch_count) {
+        p.width = uint16_t(map_w);
+        p.height = uint16_t(map_h);
+      } else {
+        p.width = uint16_t(integer(1, std::min(o.max_patch, map_w)));
+        p.height = uint16_t(integer(1, std::min(o.max_patch, map_h)));
+      }
+      if (coarse) p.target = kTargetIndirectMap;
       if (cx + p.width > as) cx = 0, cy += shelf, shelf = 0;
       if (cy + p.height > as) atlases.emplace_back(), cx = cy = shelf = 0;
       p.atlas = uint8_t(atlases.size() - 1);
@@ -112,8 +140,8 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
       p.atlas_y = uint16_t(cy);
       cx += p.width;
       if (p.height > shelf) shelf = p.height;
-      p.dest_x = uint16_t(integer(0, o.width - p.width));
-      p.dest_y = uint16_t(integer(0, o.height - p.height));
+      p.dest_x = uint16_t(integer(0, map_w - p.width));
+      p.dest_y = uint16_t(integer(0, map_h - p.height));
       p.channel_count = uniform(0, 1) < 0.3f ? 3 : 1;
       p.channel = uint8_t(integer(0, p.channel_count == 3 ? 1 : 3));
       p.encoding = uniform(0, 1) < 0.5f ? kEncodingSquare : kEncodingLinear;
@@ -125,7 +153,11 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   }
   for (auto& a : atlases) {
     a.resize(size_t(as) * as * 4);
-    for (uint8_t& b : a) b = uint8_t(integer(0, 255));
+    for (size_t i = 0; i < a.size(); ++i) {
+      a[i] = o.atlas_byte
+                 ? o.atlas_byte(uint32_t(i / 4 % as), uint32_t(i / 4 / as), uint32_t(i % 4))
+                 : uint8_t(integer(0, 255));
+    }
   }
 
   // Layout: header, index, then 256-aligned sections.
@@ -153,6 +185,21 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     atlas_records.push_back(AtlasRecord{as, as, data_at + a * atlas_bytes});
   }
 
+  Header h{};
+  h.magic = kMagic;
+  h.version = kVersion;
+  h.file_size = cursor;
+  h.section_count = section_count;
+  h.lightmap_width = o.width;
+  h.lightmap_height = o.height;
+  h.light_count = o.lights;
+  h.object_count = o.objects;
+  h.group_count = uint32_t(groups.size());
+  h.patch_count = uint32_t(patches.size());
+  h.atlas_count = uint32_t(atlases.size());
+  h.indirect_scale = o.indirect_scale;
+  if (o.mutate) o.mutate(h, patches);
+
   SyntheticPack out;
   out.size = cursor;
   out.storage.assign((cursor + 7) / 8, 0);
@@ -170,18 +217,6 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   put(strings_at, strings.data(), strings.size());
   put(sizeof(Header), index.data(), index.size() * sizeof(SectionEntry));
 
-  Header h{};
-  h.magic = kMagic;
-  h.version = kVersion;
-  h.file_size = cursor;
-  h.section_count = section_count;
-  h.lightmap_width = o.width;
-  h.lightmap_height = o.height;
-  h.light_count = o.lights;
-  h.object_count = o.objects;
-  h.group_count = uint32_t(groups.size());
-  h.patch_count = uint32_t(patches.size());
-  h.atlas_count = uint32_t(atlases.size());
   uint32_t crc = crc32(b + sizeof(Header), index.size() * sizeof(SectionEntry));
   for (const SectionEntry& e : index) {
     if (e.type != kSectionAtlasData) crc = crc32(b + e.offset, e.length, crc);

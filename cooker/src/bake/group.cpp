@@ -132,7 +132,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
         decide(DecisionKind::kObjectBounce, DecisionStage::kBounce, lg.bounce_only[q], -1,
                !only[q].empty(), only_reason[q], std::nan(""), std::nan(""),
                seconds[cand.sets.size() + q]);
-      ind->add(gb.indirect, dp.map);
+      ind->add(gb.indirect, dp.map, &out.indirect);
     }
     report.stage_time(is_static ? "bake.base_bounce" : "bake.contribution_bounce",
                       seconds_since(tb));
@@ -146,22 +146,23 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
   const DecisionKind kind = is_static ? DecisionKind::kStaticShadow : DecisionKind::kPair;
   const int light_index = int(group) - 1;  // BakedMaps::lights index of a light group
   std::vector<uint8_t> kept(cand.sets.size(), 0);
-  auto keep_map = [&](int object, FloatImage map, DecisionStage stage, const std::string& what) {
+  auto keep_map = [&](int object, FloatImage map, FloatImage blocks, DecisionStage stage,
+                      const std::string& what) {
     if (grey) map = first_channel(map);
     const float peak = peak_of(map, texels);
     const bool keep = !planned || peak > keep_at;
     decide(kind, stage, object, -1, keep, keep_reason(peak, keep_at, what), peak, keep_at);
     if (!keep) return false;
     if (is_static)
-      out.static_shadows.push_back({object, std::move(map)});
+      out.static_shadows.push_back({object, std::move(map), std::move(blocks)});
     else
-      out.shadows.push_back({light_index, object, std::move(map)});
+      out.shadows.push_back({light_index, object, std::move(map), std::move(blocks)});
     return true;
   };
   for (size_t j = 0; j < cand.sets.size(); ++j) {
-    FloatImage map = dp.shadow[j].dense();
-    if (bounce) ind->add(change[j], map);
-    kept[j] = keep_map(cand.objects[j], std::move(map), DecisionStage::kTraced,
+    FloatImage map = dp.shadow[j].dense(), blocks;
+    if (bounce) ind->add(change[j], map, &blocks);
+    kept[j] = keep_map(cand.objects[j], std::move(map), std::move(blocks), DecisionStage::kTraced,
                        is_static ? "change" : "shadow")
                   ? 1
                   : 0;
@@ -172,9 +173,10 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
              lg.bounce_only_why[q] + "; bounce: " + only_reason[q]);
       continue;
     }
-    FloatImage map(w, h, 3);
-    ind->add(std::move(only[q]), map);
-    keep_map(lg.bounce_only[q], std::move(map), DecisionStage::kBounce, "bounce change");
+    FloatImage map(w, h, 3), blocks;
+    ind->add(std::move(only[q]), map, &blocks);
+    keep_map(lg.bounce_only[q], std::move(map), std::move(blocks), DecisionStage::kBounce,
+             "bounce change");
   }
 
   // Overlaps: where two objects block the same rays, S_a + S_b removes that light twice; the
@@ -217,7 +219,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
       BounceMap p(ab.size());
       for (size_t c = 0; c < p.size(); ++c)
         p[c] = change[size_t(key.first)][c] + change[size_t(key.second)][c] - ab[c];
-      ind->add(std::move(p), pc.map);
+      ind->add(std::move(p), pc.map, &pc.indirect);
     } else if (grey) {
       pc.map = first_channel(pc.map);
     }

@@ -57,7 +57,7 @@ Integrator parse_integrator(const std::string& name) {
 GatherPreset gather_preset(const BakeOptions& options) {
   GatherPreset p = preset_gather(options.quality);
   if (options.gather_rays > 0) p.rays = options.gather_rays;
-  if (options.indirect_level > 0) p.level = options.indirect_level;
+  if (options.indirect_scale > 0) p.level = options.indirect_scale;
   if (options.denoise >= 0) p.denoise = options.denoise;
   return p;
 }
@@ -171,11 +171,13 @@ BakedMaps BakeSession::assemble(std::vector<GroupBake> groups, Report& report) c
     }
     if (g.group == 0) {
       maps.base = std::move(g.map);
+      maps.base_indirect = std::move(g.indirect);
       maps.static_shadows = std::move(g.static_shadows);
       continue;
     }
     maps.lights.push_back(plan.groups[g.group].light);
     maps.contribution.push_back(std::move(g.map));
+    maps.contribution_indirect.push_back(std::move(g.indirect));
     for (ShadowMap& s : g.shadows) maps.shadows.push_back(std::move(s));
     for (PairCorrectionMap& p : g.pair_corrections) maps.pair_corrections.push_back(std::move(p));
   }

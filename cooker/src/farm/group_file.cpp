@@ -19,6 +19,7 @@ namespace {
 constexpr int kMaxSide = 16384;
 constexpr uint32_t kMaxReason = 64 * 1024;
 enum Role : uint32_t { kOwn = 0, kShadow = 1, kPair = 2, kStaticShadow = 3 };
+enum Part : uint16_t { kNoPart = 0, kHasPart = 1, kIsPart = 2 };  // MapRecord::indirect
 
 template <typename T>
 void put(std::vector<uint8_t>& out, const T& v) {
@@ -44,8 +45,9 @@ void zero_free_rect(const FloatImage& m, int& x0, int& y0, int& x1, int& y1) {
   if (x1 <= x0 || y1 <= y0) x0 = y0 = x1 = y1 = 0;
 }
 
-void put_map(std::vector<uint8_t>& out, uint32_t role, int light, int object, int object_b,
-             const FloatImage& m) {
+// One image as a record, its mask and its values; `part` is MapRecord::indirect.
+void put_image(std::vector<uint8_t>& out, uint32_t role, int light, int object, int object_b,
+               const FloatImage& m, uint16_t part) {
   if (m.width <= 0 || m.height <= 0 || m.width > kMaxSide || m.height > kMaxSide ||
       (m.channels != 1 && m.channels != 3) ||
       m.data.size() != size_t(m.width) * size_t(m.height) * size_t(m.channels)) {
@@ -66,6 +68,7 @@ void put_map(std::vector<uint8_t>& out, uint32_t role, int light, int object, in
   r.rect_w = uint16_t(x1 - x0);
   r.rect_h = uint16_t(y1 - y0);
   r.channels = uint16_t(m.channels);
+  r.indirect = part;
   const size_t c = size_t(m.channels), row = size_t(x1 - x0) * c;
   const size_t n = row * size_t(y1 - y0);
   std::vector<uint8_t> mask((n + 7) / 8, 0);
@@ -85,6 +88,14 @@ void put_map(std::vector<uint8_t>& out, uint32_t role, int light, int object, in
   const size_t at = out.size();
   out.resize(at + values.size() * sizeof(float));
   std::memcpy(out.data() + at, values.data(), values.size() * sizeof(float));
+}
+
+// A map and, when it has one, its indirect part (the block image, BakedMaps) after it.
+void put_map(std::vector<uint8_t>& out, uint32_t role, int light, int object, int object_b,
+             const FloatImage& m, const FloatImage& indirect) {
+  const bool has_part = !indirect.data.empty();
+  put_image(out, role, light, object, object_b, m, has_part ? kHasPart : kNoPart);
+  if (has_part) put_image(out, role, light, object, object_b, indirect, kIsPart);
 }
 
 // A cursor over untrusted bytes: every read is bounds-checked first.
@@ -144,13 +155,14 @@ std::vector<uint8_t> encode_group(const GroupBake& g, const std::array<uint8_t, 
   std::vector<uint8_t> out(sizeof(GroupFileHeader), 0);
   uint32_t maps = 0;
   const bool is_static = g.group == 0;
-  put_map(out, kOwn, -1, -1, -1, g.map);
+  put_map(out, kOwn, -1, -1, -1, g.map, g.indirect);
   ++maps;
-  for (const ShadowMap& s : g.shadows) put_map(out, kShadow, s.light, s.object, -1, s.map), ++maps;
+  for (const ShadowMap& s : g.shadows)
+    put_map(out, kShadow, s.light, s.object, -1, s.map, s.indirect), ++maps;
   for (const PairCorrectionMap& p : g.pair_corrections)
-    put_map(out, kPair, p.light, p.object_a, p.object_b, p.map), ++maps;
+    put_map(out, kPair, p.light, p.object_a, p.object_b, p.map, p.indirect), ++maps;
   for (const StaticShadowMap& s : g.static_shadows)
-    put_map(out, kStaticShadow, -1, s.object, -1, s.map), ++maps;
+    put_map(out, kStaticShadow, -1, s.object, -1, s.map, s.indirect), ++maps;
   if (is_static && (!g.shadows.empty() || !g.pair_corrections.empty()))
     throw CookError("group file: the static group has light shadows");
   for (const Decision& d : g.decisions) {
@@ -216,22 +228,52 @@ GroupBake decode_group(const uint8_t* data, size_t size, const GroupFileExpect& 
   auto object_ok = [&](int32_t o) { return o >= 0 && uint64_t(o) < e.objects; };
   uint32_t last_role = kOwn;
   std::set<std::array<int64_t, 3>> owners;
+  // The image of record r (its mask and values, which follow it), `what` naming it in errors.
+  auto read_image = [&](const MapRecord& r, const std::string& what) {
+    if ((r.channels != 1 && r.channels != 3) || uint32_t(r.rect_x) + r.rect_w > r.width ||
+        uint32_t(r.rect_y) + r.rect_h > r.height)
+      throw CookError("group file: " + what + " has a bad channel count or rect");
+    const uint64_t row = uint64_t(r.rect_w) * r.channels, n = row * r.rect_h;
+    if (r.nonzero > n) throw CookError("group file: " + what + " has a bad count");
+    const uint8_t* mask = in.need((n + 7) / 8, "map mask");
+    const uint8_t* values = in.need(r.nonzero * sizeof(float), "map values");
+    uint64_t set = 0;
+    for (uint64_t b = 0; b < (n + 7) / 8; ++b) set += uint64_t(std::popcount(mask[b]));
+    if (set != r.nonzero || (n % 8 != 0 && (mask[n / 8] >> (n % 8)) != 0))
+      throw CookError("group file: " + what + " mask disagrees with its count");
+    FloatImage m(r.width, r.height, r.channels);
+    uint64_t k = 0, v = 0;
+    for (uint32_t y = 0; y < r.rect_h; ++y) {
+      float* dst = m.data.data() + (size_t(r.rect_y + y) * r.width + r.rect_x) * r.channels;
+      for (uint64_t x = 0; x < row; ++x, ++k) {
+        if (!((mask[k / 8] >> (k % 8)) & 1u)) continue;
+        float f;
+        std::memcpy(&f, values + v * sizeof(float), sizeof f);
+        ++v;
+        if (!std::isfinite(f) || std::bit_cast<uint32_t>(f) == 0)
+          throw CookError("group file: " + what + " has a non-finite value");
+        dst[x] = f;
+      }
+    }
+    return m;
+  };
   for (uint32_t i = 0; i < h.map_count; ++i) {
+    const std::string what = "map " + std::to_string(i);
     const MapRecord r = in.take<MapRecord>("map record");
     if (r.width != e.width || r.height != e.height)
-      throw CookError("group file: map " + std::to_string(i) + " is " + std::to_string(r.width) +
-                      "x" + std::to_string(r.height) + ", the light map " +
-                      std::to_string(e.width) + "x" + std::to_string(e.height));
-    if ((r.channels != 1 && r.channels != 3) || r.reserved != 0 ||
-        uint32_t(r.rect_x) + r.rect_w > r.width || uint32_t(r.rect_y) + r.rect_h > r.height)
-      throw CookError("group file: map " + std::to_string(i) + " has a bad channel count or rect");
+      throw CookError("group file: " + what + " is " + std::to_string(r.width) + "x" +
+                      std::to_string(r.height) + ", the light map " + std::to_string(e.width) +
+                      "x" + std::to_string(e.height));
+    // An indirect part only where the layout has blocks.
+    if (!(r.indirect == kNoPart || (r.indirect == kHasPart && e.indirect_width > 0)))
+      throw CookError("group file: " + what + " has a bad indirect flag");
     // Roles in order (own map, shadows, pairs, static shadows), each owner once: the map count
     // stays within what the plan allows.
     if ((i == 0) != (r.role == kOwn) || r.role < last_role)
-      throw CookError("group file: map " + std::to_string(i) + " out of order");
+      throw CookError("group file: " + what + " out of order");
     last_role = r.role;
     if (r.role != kOwn && !owners.insert({r.role, r.object, r.object_b}).second)
-      throw CookError("group file: map " + std::to_string(i) + " repeats an owner");
+      throw CookError("group file: " + what + " repeats an owner");
     bool ok = false;
     switch (r.role) {
       case kOwn:
@@ -251,41 +293,31 @@ GroupBake decode_group(const uint8_t* data, size_t size, const GroupFileExpect& 
       default:
         break;
     }
-    if (!ok) throw CookError("group file: map " + std::to_string(i) + " has a bad role or owner");
-    const uint64_t row = uint64_t(r.rect_w) * r.channels, n = row * r.rect_h;
-    if (r.nonzero > n) throw CookError("group file: map " + std::to_string(i) + " has a bad count");
-    const uint8_t* mask = in.need((n + 7) / 8, "map mask");
-    const uint8_t* values = in.need(r.nonzero * sizeof(float), "map values");
-    uint64_t set = 0;
-    for (uint64_t b = 0; b < (n + 7) / 8; ++b) set += uint64_t(std::popcount(mask[b]));
-    if (set != r.nonzero || (n % 8 != 0 && (mask[n / 8] >> (n % 8)) != 0))
-      throw CookError("group file: map " + std::to_string(i) + " mask disagrees with its count");
-    FloatImage m(r.width, r.height, r.channels);
-    uint64_t k = 0, v = 0;
-    for (uint32_t y = 0; y < r.rect_h; ++y) {
-      float* dst = m.data.data() + (size_t(r.rect_y + y) * r.width + r.rect_x) * r.channels;
-      for (uint64_t x = 0; x < row; ++x, ++k) {
-        if (!((mask[k / 8] >> (k % 8)) & 1u)) continue;
-        float f;
-        std::memcpy(&f, values + v * sizeof(float), sizeof f);
-        ++v;
-        if (!std::isfinite(f) || std::bit_cast<uint32_t>(f) == 0)
-          throw CookError("group file: map " + std::to_string(i) + " has a non-finite value");
-        dst[x] = f;
-      }
+    if (!ok) throw CookError("group file: " + what + " has a bad role or owner");
+    FloatImage m = read_image(r, what);
+    FloatImage part;
+    if (r.indirect == kHasPart) {
+      const MapRecord p = in.take<MapRecord>("map record");
+      if (p.indirect != kIsPart || p.role != r.role || p.light != r.light || p.object != r.object ||
+          p.object_b != r.object_b || p.channels != 3 || p.width != e.indirect_width ||
+          p.height != e.indirect_height)
+        throw CookError("group file: " + what + "'s indirect part does not match it or the layout");
+      part = read_image(p, what + "'s indirect part");
     }
     switch (r.role) {
       case kOwn:
         g.map = std::move(m);
+        g.indirect = std::move(part);
         break;
       case kShadow:
-        g.shadows.push_back({r.light, r.object, std::move(m)});
+        g.shadows.push_back({r.light, r.object, std::move(m), std::move(part)});
         break;
       case kPair:
-        g.pair_corrections.push_back({r.light, r.object, r.object_b, std::move(m)});
+        g.pair_corrections.push_back(
+            {r.light, r.object, r.object_b, std::move(m), std::move(part)});
         break;
       default:
-        g.static_shadows.push_back({r.object, std::move(m)});
+        g.static_shadows.push_back({r.object, std::move(m), std::move(part)});
         break;
     }
   }

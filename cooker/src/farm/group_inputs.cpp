@@ -188,6 +188,7 @@ JobDigests job_input_digests(const PreparedScene& p, const BakeContext& b, const
   common.value(o.plan_effects);
   common.value(p.texels.width);
   common.value(p.texels.height);
+  common.value(p.layout.align);  // the blocks of the indirect parts
   common.value(b.eps);
   common.value(b.extent);
   common.value(b.output_step);

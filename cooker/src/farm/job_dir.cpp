@@ -62,7 +62,7 @@ JobHash hash_of(const std::string& name) {
 
 // Every option is stored (threads aside): an option added to these structs must be added here and
 // to settings_from_json, or a job would run with its default. (Sizes on 64-bit Linux.)
-static_assert(sizeof(LayoutOptions) == 20, "LayoutOptions changed: update job_dir.cpp");
+static_assert(sizeof(LayoutOptions) == 28, "LayoutOptions changed: update job_dir.cpp");
 static_assert(sizeof(BakeOptions) == 56, "BakeOptions changed: update job_dir.cpp");
 
 json settings_json(const CookSettings& s) {
@@ -72,6 +72,8 @@ json settings_json(const CookSettings& s) {
           {"texels_per_unit", s.layout.texels_per_unit},
           {"border_texels", s.layout.border_texels},
           {"max_lightmap_size", s.layout.max_lightmap_size},
+          {"align", s.layout.align},
+          {"align_required", s.layout.align_required},
           {"unwrap", s.layout.unwrap == UnwrapMode::kAlways  ? "always"
                      : s.layout.unwrap == UnwrapMode::kNever ? "never"
                                                              : "auto"},
@@ -82,7 +84,7 @@ json settings_json(const CookSettings& s) {
           {"indirect", b.indirect},
           {"integrator", integrator_name(b.integrator)},
           {"gather_rays", b.gather_rays},
-          {"indirect_level", b.indirect_level},
+          {"indirect_scale", b.indirect_scale},
           {"denoise", b.denoise},
           {"plan_effects", b.plan_effects},
           {"output_step", b.output_step}};
@@ -116,6 +118,8 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
     throw CookError(file + ": \"texels_per_unit\" out of range");
   s.layout.border_texels = int_field(j, "border_texels", 0, 64, file);
   s.layout.max_lightmap_size = int_field(j, "max_lightmap_size", 8, 16384, file);
+  s.layout.align = int_field(j, "align", 1, 8, file);  // unwrap checks it is 1, 2, 4 or 8
+  s.layout.align_required = field<bool>(j, "align_required", file);
   const std::string unwrap = field<std::string>(j, "unwrap", file);
   if (unwrap == "auto")
     s.layout.unwrap = UnwrapMode::kAuto;
@@ -132,7 +136,7 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   s.bake.indirect = field<bool>(j, "indirect", file);
   s.bake.integrator = parse_integrator(field<std::string>(j, "integrator", file));
   s.bake.gather_rays = int_field(j, "gather_rays", 0, 65536, file);
-  s.bake.indirect_level = int_field(j, "indirect_level", 0, 8, file);
+  s.bake.indirect_scale = int_field(j, "indirect_scale", 0, 8, file);
   s.bake.denoise = int_field(j, "denoise", -1, 3, file);
   s.bake.plan_effects = field<bool>(j, "plan_effects", file);
   s.bake.output_step = field<float>(j, "output_step", file);
@@ -453,6 +457,10 @@ std::vector<uint8_t> assemble_job_dir(const std::string& dir, int threads, Progr
     e.group = jobs[i].group;
     e.width = layout.width;
     e.height = layout.height;
+    if (layout.align > 1) {
+      e.indirect_width = layout.width / layout.align;
+      e.indirect_height = layout.height / layout.align;
+    }
     e.objects = r.scene->scene.objects.size();
     e.lights = r.scene->scene.lights.size();
     e.max_maps = r.jobs->max_maps(i);

@@ -82,16 +82,24 @@ class GatherIntegrator final : public IndirectIntegrator {
     return first_change_peak(op_, present, empty(group));
   }
 
-  void add(BounceMap map, FloatImage& fine) const override {
+  void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const override {
     denoise(op_.grid, preset_.denoise, map);
-    add_magnified(op_.grid, b_.texels, map, fine);
+    const int s = b_.layout.align;
+    if (s <= 1) {
+      add_magnified(op_.grid, b_.texels, map, fine);
+      return;
+    }
+    FloatImage image = block_image(op_.grid, b_.texels, s, map);
+    add_block_magnified(image, s, b_.texels, fine);
+    if (blocks) *blocks = std::move(image);
   }
 
   void add_state(const FloatImage& direct, const std::vector<uint8_t>& present, float threshold,
                  FloatImage& fine) const override {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
     SolveStats st;
-    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st).total(), fine);
+    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st).total(), fine,
+        nullptr);
     count(st, states_);
   }
 
@@ -102,6 +110,7 @@ class GatherIntegrator final : public IndirectIntegrator {
         {"rays_per_coarse_texel", preset_.rays},
         {"rays_per_bounce", {op_.level_rays[0], op_.level_rays[1], op_.level_rays[2]}},
         {"denoise_passes", preset_.denoise},
+        {"indirect_map_scale", b_.layout.align},
         {"coarse_texels", op_.grid.size()},
         {"buried_texels", op_.buried_texels},
         {"gather_rays", op_.rays_traced},

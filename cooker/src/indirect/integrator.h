@@ -57,8 +57,11 @@ class IndirectIntegrator {
   // A cheap bound of the first bounce of change() for objects that block no direct light.
   virtual float first_change(const GroupBounce& group,
                              const std::vector<uint8_t>& present) const = 0;
-  // Adds a bounce map to a fine map (3 channels) as light-map irradiance.
-  virtual void add(BounceMap map, FloatImage& fine) const = 0;
+  // Adds a bounce map to a fine map (3 channels) as light-map irradiance. With an indirect map
+  // (Layout::align > 1) that is the magnification of its block image (block_image(), what the
+  // pack's indirect map holds), which `blocks` (may be null) receives; otherwise `blocks` is left
+  // as it is.
+  virtual void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const = 0;
   // A whole state's bounce light from its direct light (3 channels) with the objects `present`,
   // added to `fine`. `threshold`: the finest significance among the state's groups.
   virtual void add_state(const FloatImage& direct, const std::vector<uint8_t>& present,

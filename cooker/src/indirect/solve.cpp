@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lightpatch/indirect_map.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -277,6 +278,67 @@ void denoise(const CoarseGrid& grid, int levels, CoarseMap& map) {
     }
     map.swap(out);
   }
+}
+
+FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,
+                       const CoarseMap& map) {
+  const int bw = texels.width / s, bh = texels.height / s;
+  FloatImage out(bw, bh, 3);
+  std::vector<float> count(size_t(bw) * bh, 0.0f);
+  std::vector<int32_t> region(size_t(bw) * bh, -1);
+  for (int y = 0; y < bh * s; ++y)
+    for (int x = 0; x < bw * s; ++x) {
+      const size_t t = texels.index(x, y);
+      const size_t b = size_t(y / s) * bw + size_t(x / s);
+      if (region[b] < 0) region[b] = texels.region[t];
+      const uint32_t c = grid.coarse_of[t];
+      if (!texels.valid[t] || c == kNoTexel || !grid.alive[c]) continue;
+      for (int ch = 0; ch < 3; ++ch) out.data[b * 3 + size_t(ch)] += map[c][ch];
+      count[b] += 1.0f;
+    }
+  for (size_t b = 0; b < count.size(); ++b)
+    if (count[b] > 0.0f)
+      for (int ch = 0; ch < 3; ++ch) out.data[b * 3 + size_t(ch)] /= count[b];
+  // Rings: blocks without a value take the mean of their valued neighbours of the same region.
+  std::vector<uint8_t> filled(count.size());
+  for (size_t b = 0; b < count.size(); ++b) filled[b] = count[b] > 0.0f;
+  for (int ring = 0; ring < 2; ++ring) {
+    std::vector<std::pair<size_t, glm::vec3>> fill;
+    for (int by = 0; by < bh; ++by)
+      for (int bx = 0; bx < bw; ++bx) {
+        const size_t b = size_t(by) * bw + size_t(bx);
+        if (filled[b] || region[b] < 0) continue;
+        glm::vec3 sum(0.0f);
+        float n = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = bx + dx, ny = by + dy;
+            if (nx < 0 || ny < 0 || nx >= bw || ny >= bh) continue;
+            const size_t q = size_t(ny) * bw + size_t(nx);
+            if (!filled[q] || region[q] != region[b]) continue;
+            sum += glm::vec3(out.data[q * 3], out.data[q * 3 + 1], out.data[q * 3 + 2]);
+            n += 1.0f;
+          }
+        if (n > 0.0f) fill.push_back({b, sum / n});
+      }
+    for (const auto& [b, v] : fill) {
+      for (int ch = 0; ch < 3; ++ch) out.data[b * 3 + size_t(ch)] = v[ch];
+      filled[b] = 1;
+    }
+  }
+  return out;
+}
+
+void add_block_magnified(const FloatImage& blocks, int s, const TexelSet& texels,
+                         FloatImage& fine) {
+  for (int y = 0; y < blocks.height * s; ++y)
+    for (int x = 0; x < blocks.width * s; ++x) {
+      if (!texels.valid[texels.index(x, y)]) continue;
+      float v[3];
+      sample_indirect(blocks.data.data(), 3, uint32_t(blocks.width), uint32_t(blocks.height),
+                      uint32_t(s), uint32_t(x), uint32_t(y), v);
+      for (int ch = 0; ch < 3; ++ch) fine.at(x, y, ch) += v[ch];
+    }
 }
 
 void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,

@@ -3,8 +3,12 @@
 // (the runtime's CPU path, uploaded as the texture the game samples). Presenting clamps at zero
 // and multiplies by the presentation scale (planner.h, runtime.h).
 //
-// The sink owns no memory: the caller sizes the buffers for the pack (width*height*3 doubles, and
-// width*height*3 floats or width*height*4 halves) and keeps them alive.
+// Both targets: the buffers hold the pack's map set (pack_view.h: the light map, then the indirect
+// map where the pack has one), so a pack with an indirect map has two accumulators and two
+// presented maps, each drawn and presented in its own texels.
+//
+// The sink owns no memory: the caller sizes the buffers for the pack (map_texels()*3 doubles, and
+// map_texels()*3 floats or map_texels()*4 halves) and keeps them alive.
 #pragma once
 
 #include <cstdint>
@@ -26,21 +30,23 @@ class CpuSink final : public DrawSink {
   void present(uint32_t first_patch, uint32_t patch_count) override;
   void present_all() override;
 
-  // Rows [dirty_begin(), dirty_end()) of the presented map changed since the last
-  // clear_dirty() (empty when begin == end).
-  uint32_t dirty_begin() const { return dirty_begin_; }
-  uint32_t dirty_end() const { return dirty_end_; }
+  // Rows [dirty_begin(t), dirty_end(t)) of target t's presented map (pack::PatchTarget) changed
+  // since the last clear_dirty() (empty when begin == end).
+  uint32_t dirty_begin(uint8_t target = pack::kTargetLightMap) const {
+    return dirty_begin_[target];
+  }
+  uint32_t dirty_end(uint8_t target = pack::kTargetLightMap) const { return dirty_end_[target]; }
   void clear_dirty();
 
  private:
-  void present_rect(uint32_t x, uint32_t y, uint32_t width, uint32_t height);
+  void present_rect(uint8_t target, uint32_t x, uint32_t y, uint32_t width, uint32_t height);
 
   const PackView* pack_ = nullptr;
   double* accumulator_ = nullptr;
   float* rgb_ = nullptr;
   uint16_t* half_rgba_ = nullptr;
   float scale_ = 1.0f;
-  uint32_t dirty_begin_ = 0, dirty_end_ = 0;
+  uint32_t dirty_begin_[2] = {0, 0}, dirty_end_[2] = {0, 0};
 };
 
 }  // namespace lightpatch

@@ -2,7 +2,18 @@
 //
 // PackView::open validates everything once (header, section index, every record, every rectangle,
 // every index, the table checksum) with 64-bit overflow-safe bounds checks; after a successful
-// open every accessor is safe to call with indices below the matching count. The view never
+// open every accessor is safe to call with indices below the matching count.
+//
+// Limits a valid pack keeps (besides pack_format.h's): light map 1..kMaxLightmapSize texels per
+// axis; an indirect map (indirect_scale 2, 4 or 8 dividing both sides) of at most a quarter of
+// the light map's texels, so both maps together hold at most 1.25 * 16384^2 texels (the runtime's
+// memory is proportional: RuntimeMemory); each indirect patch inside the indirect map; within a
+// group the light-map patches before the indirect-map ones.
+//
+// The maps, laid out one after the other ("map set": what add_patches and the CPU sinks use):
+// the light map's width * height texels, row 0 at the top, then the indirect map's
+// indirect_width * indirect_height texels (none without an indirect map); map_offset(target) is
+// where a target's first texel lies, map_texels() the total. The view never
 // copies or owns the bytes: the caller keeps the memory alive and unchanged while the view is used.
 // No exceptions, no allocation.
 #pragma once
@@ -35,6 +46,32 @@ class PackView {
   const pack::Header& header() const { return *header_; }
   uint32_t lightmap_width() const { return header_->lightmap_width; }
   uint32_t lightmap_height() const { return header_->lightmap_height; }
+
+  // The indirect map (pack_format.h, "Two target maps"): light-map texels per indirect texel along
+  // each axis (0: none), and its size in texels (0 x 0 without one).
+  bool has_indirect_map() const { return header_->indirect_scale != 0; }
+  uint32_t indirect_scale() const { return header_->indirect_scale; }
+  uint32_t indirect_width() const {
+    return has_indirect_map() ? header_->lightmap_width / header_->indirect_scale : 0;
+  }
+  uint32_t indirect_height() const {
+    return has_indirect_map() ? header_->lightmap_height / header_->indirect_scale : 0;
+  }
+  // Size of a PatchTarget's map in texels.
+  uint32_t map_width(uint8_t target) const {
+    return target == pack::kTargetIndirectMap ? indirect_width() : lightmap_width();
+  }
+  uint32_t map_height(uint8_t target) const {
+    return target == pack::kTargetIndirectMap ? indirect_height() : lightmap_height();
+  }
+  // Texel index of a target's first texel in the map set (see above), and the set's texels.
+  uint64_t map_offset(uint8_t target) const {
+    return target == pack::kTargetIndirectMap ? uint64_t(lightmap_width()) * lightmap_height() : 0;
+  }
+  uint64_t map_texels() const {
+    return uint64_t(lightmap_width()) * lightmap_height() +
+           uint64_t(indirect_width()) * indirect_height();
+  }
 
   uint32_t light_count() const { return header_->light_count; }
   uint32_t object_count() const { return header_->object_count; }

@@ -14,15 +14,17 @@
 namespace lightpatch {
 
 // Adds factor * (signed decoded value) of every texel of patches [first, first + count) to
-// `map` (RGB, 3 values per texel, the pack's light-map width per row, row 0 = top). With
-// `absolute`, adds |factor * value| (magnitude bounds). A grey patch (one channel) adds its value
-// to all three channels. The patches must be valid indices of a validated pack.
+// `maps`: the pack's map set (pack_view.h: the light map, then the indirect map if the pack has
+// one; RGB, 3 values per texel, row 0 = top), each patch into its own target. With `absolute`,
+// adds |factor * value| (magnitude bounds). A grey patch (one channel) adds its value to all three
+// channels. The patches must be valid indices of a validated pack.
 template <typename T>
-void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T factor[3], T* map,
+void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T factor[3], T* maps,
                  bool absolute = false) {
-  const uint32_t w = pack.lightmap_width();
   for (uint32_t i = first; i < first + count; ++i) {
     const pack::PatchRecord& p = pack.patch(i);
+    const uint32_t w = pack.map_width(p.target);
+    T* map = maps + pack.map_offset(p.target) * 3;
     const uint32_t aw = pack.atlas(p.atlas).width;
     const uint8_t* pixels = pack.atlas_pixels(p.atlas);
     // Decoded, signed values for the 256 codes: the texel loop is a lookup.

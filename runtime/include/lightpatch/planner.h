@@ -6,15 +6,21 @@
 //   L = B + sum_l f_l * (C_l - sum_{o visible} S_ol + sum_{a<b visible} P_lab)  (+ static shadows)
 // and a draw of a group with factor f adds f * (signed decoded patch values) to the accumulator.
 //
-// Two maps: the accumulator, where every draw lands, and the presented map the game samples,
+// Two stages: the accumulator, where every draw lands, and the presented map the game samples,
 // which a sink writes from the accumulator only when a change or a rebuild is complete (present
 // steps). Presenting clamps at zero: the 8-bit quantization of B, C and S does not cancel exactly
 // where a visible object's shadow removes all of a light (a few steps of the light's scale, of
 // either sign, where bake-state gives 0), and light is never negative.
+// Two targets: a pack with an indirect map (pack_view.h) has an accumulator and a presented map
+// for each of the light map and the indirect map. Every draw and present step covers patches of
+// one group and one target (a group's draw is split into its light-map and its indirect-map
+// range), and every cost is counted in texels of the target written: an indirect patch costs its
+// own (coarse) texels. The clear and the whole-map present cover both maps (width * height plus
+// indirect_width * indirect_height texels each).
 //  * Full rebuild: clear the accumulator, draw every active group with the factors of a snapshot
 //    of the wanted state, then present the whole map. Steps are group draws (split into patch
 //    ranges when a group exceeds the budget); their cost in texels (sum of patch areas; the clear
-//    and the whole-map present: width*height each) is known before they run. The game only ever
+//    and the whole-map present: the maps' texels each) is known before they run. The game only ever
 //    samples a complete map: the presented map keeps the previous state until the present step.
 //  * Incremental change (paper Alg. 8-9): a light's factor changes by d -> draw its contribution,
 //    visible-shadow and visible-pair groups with factor d; an object toggles -> draw its
@@ -54,17 +60,27 @@ namespace lightpatch {
 class DrawSink {
  public:
   virtual ~DrawSink() = default;
-  // Clears the accumulator (the first step of a rebuild).
+  // Clears the accumulator (the first step of a rebuild): both targets' where the pack has an
+  // indirect map.
   virtual void clear() = 0;
-  // Adds patches [first_patch, first_patch + patch_count) (pack indices, all of one group), each
-  // multiplied by `factor` (linear RGB) and its own sign, to the accumulator.
+  // Adds patches [first_patch, first_patch + patch_count) (pack indices, all of one group and one
+  // target: PatchRecord::target of the first), each multiplied by `factor` (linear RGB) and its
+  // own sign, to that target's accumulator.
   virtual void draw(uint32_t group, uint32_t first_patch, uint32_t patch_count,
                     const float factor[3]) = 0;
   // Writes the accumulator's texels under the destination rectangles of patches
-  // [first_patch, first_patch + patch_count) into the presented map, clamped at zero.
+  // [first_patch, first_patch + patch_count) (all of one target) into that target's presented
+  // map, clamped at zero.
   virtual void present(uint32_t first_patch, uint32_t patch_count) = 0;
-  // Writes the whole accumulator into the presented map, clamped at zero.
+  // Writes every target's whole accumulator into its presented map, clamped at zero.
   virtual void present_all() = 0;
+};
+
+// A cost split by target: texels of the light map and texels of the indirect map.
+struct TargetTexels {
+  uint64_t light_map = 0;
+  uint64_t indirect_map = 0;
+  uint64_t total() const { return light_map + indirect_map; }
 };
 
 struct PlannerLimits {
@@ -83,6 +99,7 @@ struct TargetPrecision {
 struct FrameStats {
   uint64_t frame = 0;                  // update() calls so far
   uint64_t texels = 0;                 // texels written this frame (clears and presents included)
+  uint64_t indirect_texels = 0;        // the part of `texels` written into the indirect map
   uint32_t draws = 0;                  // draw and present steps this frame
   uint32_t pending_changes = 0;        // lights/objects whose wanted state is not yet presented
   uint32_t oldest_pending_frames = 0;  // age in frames of the oldest pending change
@@ -140,12 +157,20 @@ class Planner {
   bool map_ready() const { return ready_; }
   bool idle() const;  // presented, nothing pending, no rebuild running
 
-  // Costs in texels, known before anything runs (presents included).
+  // Costs in texels of the targets written, known before anything runs (presents included).
   uint64_t group_texels(uint32_t group) const { return group_texels_[group]; }
-  uint64_t clear_texels() const { return clear_texels_; }
-  uint64_t rebuild_texels() const;                       // the full rebuild of the wanted state
-  uint64_t light_change_texels(uint32_t light) const;    // for the presented visibility
-  uint64_t object_change_texels(uint32_t object) const;  // for the presented factors
+  uint64_t clear_texels() const { return clear_texels_; }  // both maps
+  uint64_t rebuild_texels() const;                         // the full rebuild of the wanted state
+  uint64_t light_change_texels(uint32_t light) const { return light_change_cost(light).total(); }
+  uint64_t object_change_texels(uint32_t object) const {
+    return object_change_cost(object).total();
+  }
+  // The same split into light-map and indirect-map texels.
+  TargetTexels group_cost(uint32_t group) const;
+  TargetTexels light_change_cost(uint32_t light) const;    // for the presented visibility
+  TargetTexels object_change_cost(uint32_t object) const;  // for the presented factors
+  // First patch of the group that targets the indirect map (its end when none does).
+  uint32_t group_indirect_first(uint32_t group) const { return group_split_[group]; }
 
   // An upper bound of |L| over the map for the wanted state: max |B| + sum_l max_c f_l * max A_l.
   float wanted_map_bound() const;
@@ -160,8 +185,10 @@ class Planner {
   bool run_rebuild(uint64_t budget, DrawSink& sink);
   bool apply_light_change(uint32_t light, uint64_t budget, DrawSink& sink, bool* started);
   bool apply_object_change(uint32_t object, uint64_t budget, DrawSink& sink, bool* started);
-  void emit(DrawSink& sink, uint32_t group, uint32_t first, uint32_t count, const float factor[3],
-            uint64_t texels);
+  // Draws patches [first, end) of `group` (split at its first indirect patch: one step per target).
+  void emit(DrawSink& sink, uint32_t group, uint32_t first, uint32_t end, const float factor[3]);
+  // Counts a step's texels of patches [first, end) in the frame's stats.
+  void count_texels(uint32_t first, uint32_t end);
   void mark_for_present(uint32_t group);
   void present_marked(DrawSink& sink);
   void complete(uint64_t* since);
@@ -177,14 +204,17 @@ class Planner {
   float value_limit_ = 8.5070592e37f;  // 2^126
   uint32_t light_count_ = 0, object_count_ = 0, group_count_ = 0;
   uint64_t clear_texels_ = 0;
-  uint64_t* group_texels_ = nullptr;   // [group]
-  uint64_t* patch_prefix_ = nullptr;   // [patch + 1] prefix sums of patch areas
-  float base_bound_ = 0.0f;            // max over texels of |B| + sum_o |static shadows of o|
-  float* light_bound_ = nullptr;       // [light] max over texels of A_l
-  uint32_t* light_first_ = nullptr;    // [light + 1] range in light_groups_
-  uint32_t* light_groups_ = nullptr;   // every group of each light
-  uint32_t* object_first_ = nullptr;   // [object + 1] range in object_groups_
-  uint32_t* object_groups_ = nullptr;  // groups naming each object
+  uint64_t indirect_clear_texels_ = 0;   // the indirect map's part of clear_texels_
+  uint64_t* group_texels_ = nullptr;     // [group]
+  uint64_t* patch_prefix_ = nullptr;     // [patch + 1] prefix sums of patch areas
+  uint64_t* indirect_prefix_ = nullptr;  // [patch + 1] prefix sums of indirect patches' areas
+  uint32_t* group_split_ = nullptr;      // [group] first patch targeting the indirect map
+  float base_bound_ = 0.0f;              // max over texels of |B| + sum_o |static shadows of o|
+  float* light_bound_ = nullptr;         // [light] max over texels of A_l
+  uint32_t* light_first_ = nullptr;      // [light + 1] range in light_groups_
+  uint32_t* light_groups_ = nullptr;     // every group of each light
+  uint32_t* object_first_ = nullptr;     // [object + 1] range in object_groups_
+  uint32_t* object_groups_ = nullptr;    // groups naming each object
 
   // Wanted state.
   uint8_t* on_ = nullptr;

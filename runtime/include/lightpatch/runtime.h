@@ -3,11 +3,19 @@
 // opens a Runtime on it with a GLES 3.0 context current. Frame by frame the game sets lights and
 // objects, calls update(budget) once, and samples light_map_texture() times light_map_scale().
 //
+// Packs with an indirect map (PackView::has_indirect_map(): bounce light at 1/2, 1/4 or 1/8 of
+// the light map's resolution per axis) have a second sampled map, indirect_map_texture(), with
+// its own accumulator; the game lights a surface at light-map UV (u, v) with
+//   (texture(light_map, uv) + texture(indirect_map, uv)) * light_map_scale()
+// both sampled with the textures' own bilinear filtering (pack_format.h, "Two target maps"; the
+// indirect texture clamps at its edges). Without one, indirect_map_texture() is 0.
+//
 // Fixed memory: open() allocates everything (GL objects included): the atlases (uploaded straight
 // from the mapping), the light map the game samples (RGBA16F), one accumulator the patches are
 // drawn into, one static vertex and index buffer with every patch's quad in pack order (a group's
-// patches, e.g. a light's contribution, are one contiguous index range: one draw call), the
-// programs, one VAO, two FBOs. update() makes no heap allocation and creates no GL object.
+// patches, e.g. a light's contribution, are one contiguous index range per target: one draw
+// call), the programs, one VAO, two FBOs; with an indirect map, its sampled map, its accumulator
+// and their two FBOs too. update() makes no heap allocation and creates no GL object.
 //
 // Recomposition, budgets, incremental changes and drift control: see planner.h. Paths, chosen at
 // open() from what the driver offers (see path()):
@@ -23,13 +31,14 @@
 //    uploaded (glTexSubImage2D) after each frame that presented something.
 //
 // The sampled map holds, per channel, max(L, 0) / light_map_scale() rounded to the nearest half
-// float (ties to even) on every path. Light is never negative: the 8-bit quantization of B, C and
-// S does not cancel exactly where a visible object removes all of a light, and leaves a few
-// quantization steps of either sign there (planner.h); presenting clamps the negative ones at 0.
-// light_map_scale() is a power of two chosen at open() from the pack so that its authored state
-// fits the half-float range with 16x headroom (1 unless the pack is brighter than 4096, e.g. a
-// sun of 100,000 lux); set_light() refuses, with kOutOfRange, a state whose light map could exceed
-// the largest half float times the scale: nothing is ever clamped at the top or wraps negative.
+// float (ties to even) on every path (and the indirect map max(I, 0) / light_map_scale() alike).
+// Light is never negative: the 8-bit quantization of B, C and S does not cancel exactly where a
+// visible object removes all of a light, and leaves a few quantization steps of either sign there
+// (planner.h); presenting clamps the negative ones at 0. light_map_scale() is a power of two chosen
+// at open() from the pack so that its authored state fits the half-float range with 16x headroom (1
+// unless the pack is brighter than 4096, e.g. a sun of 100,000 lux); set_light() refuses, with
+// kOutOfRange, a state whose light map could exceed the largest half float times the scale: nothing
+// is ever clamped at the top or wraps negative.
 //
 // Image orientation: texel row 0 of every texture (GL's t = 0 end, the first row uploaded or read
 // back) is the image's top row, glTF v = 0. Sample the light map at (u, v) = the glTF light-map UV
@@ -64,11 +73,13 @@ struct RuntimeLimits {
 enum class RecomposePath : uint8_t { kGpuFloat, kGpuHalf, kCpu };
 const char* path_name(RecomposePath path);
 
-// Memory owned by the runtime, in bytes.
+// Memory owned by the runtime, in bytes, by texture and buffer.
 struct RuntimeMemory {
   uint64_t atlases = 0;
-  uint64_t light_map = 0;    // the texture the game samples (RGBA16F)
-  uint64_t accumulator = 0;  // the texture the patches are drawn into (0 on the CPU path)
+  uint64_t light_map = 0;             // the texture the game samples (RGBA16F)
+  uint64_t accumulator = 0;           // the texture the patches are drawn into (0 on the CPU path)
+  uint64_t indirect_map = 0;          // the indirect map the game samples (RGBA16F; 0 without one)
+  uint64_t indirect_accumulator = 0;  // its accumulator (0 without one and on the CPU path)
   uint64_t vertex_buffer = 0;
   uint64_t index_buffer = 0;
   uint64_t cpu_fallback = 0;  // host memory of the CPU path (0 on the GPU paths)
@@ -123,6 +134,14 @@ class Runtime {
   // name is fixed from open() to close() (restore() makes a new one). Holds a complete map once
   // ready().
   uint32_t light_map_texture() const { return light_map_; }
+  // The indirect map to sample besides it (RGBA16F, linear filtering, clamped at its edges,
+  // divided by light_map_scale() like the light map): indirect_width() x indirect_height() texels,
+  // indirect_scale() light-map texels per texel along each axis. 0 (and scale 0) when the pack has
+  // no indirect map. Fixed from open() to close() like light_map_texture().
+  uint32_t indirect_map_texture() const { return indirect_map_; }
+  uint32_t indirect_scale() const { return pack_.indirect_scale(); }
+  uint32_t indirect_width() const { return pack_.indirect_width(); }
+  uint32_t indirect_height() const { return pack_.indirect_height(); }
   // Multiply what the texture holds by this to get irradiance in the lights' units: a power of
   // two, fixed from open() to close().
   float light_map_scale() const { return scale_; }
@@ -142,6 +161,9 @@ class Runtime {
   // row 0 = top). For tools and tests: it stalls the pipeline. `out` must hold
   // width()*height()*4 floats.
   Status read_light_map(float* out, Error* error) const;
+  // The same for the indirect map: indirect_width()*indirect_height()*4 floats (kInvalidArgument
+  // when the pack has none). indirect_map.h adds it, magnified, to the light map.
+  Status read_indirect_map(float* out, Error* error) const;
 
   // Benchmark aid (the fill-rate floor): draws `texels` texels of full-target quads with the patch
   // program and additive blending into the accumulator, the same per-texel work as a rebuild with
@@ -160,6 +182,7 @@ class Runtime {
   void forget_gl();
   void set_draw_state() const;
   void reset_draw_state() const;
+  Status read_map(uint8_t target, float* out, Error* error) const;
 
   PackView pack_;
   RuntimeLimits limits_;
@@ -173,15 +196,21 @@ class Runtime {
 
   // GL objects.
   uint32_t* atlas_textures_ = nullptr;  // [atlas_count]
+  // Per target (pack::PatchTarget: [0] the light map, [1] the indirect map): the sampled map, the
+  // accumulator and their framebuffers.
   uint32_t light_map_ = 0, accumulator_ = 0;
   uint32_t light_map_fbo_ = 0, accumulator_fbo_ = 0;
+  uint32_t indirect_map_ = 0, indirect_accumulator_ = 0;
+  uint32_t indirect_map_fbo_ = 0, indirect_accumulator_fbo_ = 0;
   uint32_t vbo_ = 0, ibo_ = 0, vao_ = 0;
   uint32_t patch_program_ = 0, present_program_ = 0;
   int32_t factor_location_ = -1, present_scale_location_ = -1;
+  int32_t patch_size_location_ = -1, present_size_location_ = -1;  // u_target_size
   // Per patch: end of the run of following patches whose atlases share a batch of 8 texture
   // units (one draw call per run; with <= 8 atlases every group is one run).
   uint32_t* run_end_ = nullptr;
-  // CPU path: the double accumulator and the half-float map uploaded to the texture.
+  // CPU path: the double accumulator and the half-float maps uploaded to the textures (the pack's
+  // map set, pack_view.h).
   double* cpu_accumulator_ = nullptr;
   uint16_t* cpu_map_ = nullptr;
 };

@@ -3,11 +3,14 @@
 #include <cstring>
 #include <new>
 
+#include "lightpatch/indirect_map.h"
+
 namespace lightpatch {
 
 CpuRecomposer::~CpuRecomposer() {
   delete[] accumulator_;
   delete[] rgb_;
+  delete[] combined_;
 }
 
 Status CpuRecomposer::init(const PackView& pack, Error* error) {
@@ -17,10 +20,11 @@ Status CpuRecomposer::init(const PackView& pack, Error* error) {
   pack_ = pack;
   width_ = pack.lightmap_width();
   height_ = pack.lightmap_height();
-  const size_t n = size_t(width_) * height_ * 3;
+  const size_t n = size_t(pack.map_texels()) * 3;
   accumulator_ = new (std::nothrow) double[n]();
   rgb_ = new (std::nothrow) float[n]();
-  if (!accumulator_ || !rgb_) {
+  if (pack.has_indirect_map()) combined_ = new (std::nothrow) float[size_t(width_) * height_ * 3]();
+  if (!accumulator_ || !rgb_ || (pack.has_indirect_map() && !combined_)) {
     return set_error(error, Status::kOutOfMemory, "recomposer: cannot allocate a %ux%u light map",
                      width_, height_);
   }
@@ -56,6 +60,12 @@ Status CpuRecomposer::settle() {
     planner_.update(~0ull >> 1, sink_);
     stats_.rebuilt |= planner_.stats().presented;
     stats_.texels_drawn += planner_.stats().texels;
+    stats_.indirect_texels_drawn += planner_.stats().indirect_texels;
+  }
+  if (combined_) {
+    std::memcpy(combined_, rgb_, sizeof(float) * width_ * height_ * 3);
+    add_magnified_indirect(indirect_map(), 3, pack_.indirect_width(), pack_.indirect_height(),
+                           pack_.indirect_scale(), combined_, 3);
   }
   return planner_.idle() ? Status::kOk : Status::kInvalidArgument;
 }

@@ -18,12 +18,11 @@ void CpuSink::bind(const PackView* pack, double* accumulator, float* rgb, uint16
 }
 
 void CpuSink::clear_dirty() {
-  dirty_begin_ = dirty_end_ = 0;
+  for (int t = 0; t < 2; ++t) dirty_begin_[t] = dirty_end_[t] = 0;
 }
 
 void CpuSink::clear() {
-  std::memset(accumulator_, 0,
-              sizeof(double) * 3 * pack_->lightmap_width() * size_t(pack_->lightmap_height()));
+  std::memset(accumulator_, 0, sizeof(double) * 3 * size_t(pack_->map_texels()));
 }
 
 void CpuSink::draw(uint32_t, uint32_t first, uint32_t count, const float factor[3]) {
@@ -31,40 +30,48 @@ void CpuSink::draw(uint32_t, uint32_t first, uint32_t count, const float factor[
   add_patches(*pack_, first, count, f, accumulator_);
 }
 
-void CpuSink::present_rect(uint32_t x0, uint32_t y0, uint32_t width, uint32_t height) {
-  const uint32_t w = pack_->lightmap_width();
+void CpuSink::present_rect(uint8_t target, uint32_t x0, uint32_t y0, uint32_t width,
+                           uint32_t height) {
+  const uint32_t w = pack_->map_width(target);
+  const size_t base = size_t(pack_->map_offset(target));  // the target's first texel
   for (uint32_t y = y0; y < y0 + height; ++y) {
-    const double* src = accumulator_ + (size_t(y) * w + x0) * 3;
+    const size_t row = base + size_t(y) * w + x0;
+    const double* src = accumulator_ + row * 3;
     for (uint32_t x = 0; x < width; ++x) {
       for (uint32_t c = 0; c < 3; ++c) {
         const double v = src[x * 3 + c] > 0.0 ? src[x * 3 + c] * scale_ : 0.0;
         if (rgb_) {
-          rgb_[(size_t(y) * w + x0 + x) * 3 + c] = float(v);
+          rgb_[(row + x) * 3 + c] = float(v);
         } else {
-          half_rgba_[(size_t(y) * w + x0 + x) * 4 + c] = float_to_half(float(v));
+          half_rgba_[(row + x) * 4 + c] = float_to_half(float(v));
         }
       }
-      if (half_rgba_) half_rgba_[(size_t(y) * w + x0 + x) * 4 + 3] = 0x3C00u;  // alpha 1
+      if (half_rgba_) half_rgba_[(row + x) * 4 + 3] = 0x3C00u;  // alpha 1
     }
   }
-  if (dirty_begin_ == dirty_end_) {
-    dirty_begin_ = y0;
-    dirty_end_ = y0 + height;
+  uint32_t& begin = dirty_begin_[target];
+  uint32_t& end = dirty_end_[target];
+  if (begin == end) {
+    begin = y0;
+    end = y0 + height;
   } else {
-    if (y0 < dirty_begin_) dirty_begin_ = y0;
-    if (y0 + height > dirty_end_) dirty_end_ = y0 + height;
+    if (y0 < begin) begin = y0;
+    if (y0 + height > end) end = y0 + height;
   }
 }
 
 void CpuSink::present(uint32_t first, uint32_t count) {
   for (uint32_t p = first; p < first + count; ++p) {
     const pack::PatchRecord& pr = pack_->patch(p);
-    present_rect(pr.dest_x, pr.dest_y, pr.width, pr.height);
+    present_rect(pr.target, pr.dest_x, pr.dest_y, pr.width, pr.height);
   }
 }
 
 void CpuSink::present_all() {
-  present_rect(0, 0, pack_->lightmap_width(), pack_->lightmap_height());
+  present_rect(pack::kTargetLightMap, 0, 0, pack_->lightmap_width(), pack_->lightmap_height());
+  if (pack_->has_indirect_map()) {
+    present_rect(pack::kTargetIndirectMap, 0, 0, pack_->indirect_width(), pack_->indirect_height());
+  }
 }
 
 }  // namespace lightpatch

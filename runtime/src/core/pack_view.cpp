@@ -165,15 +165,23 @@ Status Validator::run(Parsed* out) {
                 static_cast<unsigned long long>(size_));
   }
   if (h.flags != 0) return fail(Status::kCorrupt, "header: reserved fields not zero");
-  // Indirect maps: the reader that draws them lands with their writer (issue 12); until then a
-  // pack that has one is refused by name rather than drawn wrong.
-  if (h.indirect_scale != 0)
-    return fail(Status::kUnsupported, "header: indirect map at scale %u: this reader has none",
-                h.indirect_scale);
   if (h.lightmap_width == 0 || h.lightmap_height == 0 || h.lightmap_width > kMaxLightmapSize ||
       h.lightmap_height > kMaxLightmapSize) {
     return fail(Status::kCorrupt, "light-map size %ux%u out of range 1..%u", h.lightmap_width,
                 h.lightmap_height, kMaxLightmapSize);
+  }
+  // The indirect map: 1/2, 1/4 or 1/8 of the light map per axis, a whole number of texels (so it
+  // holds at most a quarter of the light map's texels: pack_view.h's memory limit).
+  if (h.indirect_scale != 0) {
+    if (h.indirect_scale != 2 && h.indirect_scale != 4 && h.indirect_scale != 8) {
+      return fail(Status::kCorrupt, "header: indirect scale %u (must be 0, 2, 4 or 8)",
+                  h.indirect_scale);
+    }
+    if (h.lightmap_width % h.indirect_scale != 0 || h.lightmap_height % h.indirect_scale != 0) {
+      return fail(Status::kCorrupt,
+                  "header: indirect scale %u does not divide the light-map size %ux%u",
+                  h.indirect_scale, h.lightmap_width, h.lightmap_height);
+    }
   }
   // Owner indices are 16-bit with 0xFFFF meaning none; the patch's group index is 16-bit; the
   // patch's atlas index is 8-bit.
@@ -397,15 +405,30 @@ Status Validator::run(Parsed* out) {
                   "patch %u: atlas rectangle %u+%u x %u+%u exceeds atlas %u (%ux%u)", i, p.atlas_x,
                   p.width, p.atlas_y, p.height, p.atlas, a.width, a.height);
     }
-    if (uint32_t(p.dest_x) + p.width > h.lightmap_width) {
-      return fail(Status::kCorrupt,
-                  "patch %u: destination rectangle %u+%u exceeds light-map width %u", i, p.dest_x,
-                  p.width, h.lightmap_width);
+    if (p.target != kTargetLightMap && p.target != kTargetIndirectMap) {
+      return fail(Status::kCorrupt, "patch %u: unknown target %u", i, p.target);
     }
-    if (uint32_t(p.dest_y) + p.height > h.lightmap_height) {
+    if (p.target == kTargetIndirectMap && h.indirect_scale == 0) {
+      return fail(Status::kCorrupt, "patch %u: targets the indirect map of a pack that has none",
+                  i);
+    }
+    // A group's light-map patches come before its indirect-map ones (one draw range per target).
+    if (i > g.first_patch && patches[i - 1].target > p.target) {
       return fail(Status::kCorrupt,
-                  "patch %u: destination rectangle %u+%u exceeds light-map height %u", i, p.dest_y,
-                  p.height, h.lightmap_height);
+                  "patch %u: targets the light map after an indirect-map patch of group %u", i,
+                  p.group);
+    }
+    const bool indirect = p.target == kTargetIndirectMap;
+    const char* map = indirect ? "indirect-map" : "light-map";
+    const uint32_t map_w = indirect ? h.lightmap_width / h.indirect_scale : h.lightmap_width;
+    const uint32_t map_h = indirect ? h.lightmap_height / h.indirect_scale : h.lightmap_height;
+    if (uint32_t(p.dest_x) + p.width > map_w) {
+      return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds %s width %u", i,
+                  p.dest_x, p.width, map, map_w);
+    }
+    if (uint32_t(p.dest_y) + p.height > map_h) {
+      return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds %s height %u", i,
+                  p.dest_y, p.height, map, map_h);
     }
     if (p.channel_count != 1 && p.channel_count != 3) {
       return fail(Status::kCorrupt, "patch %u: channel count %u (must be 1 or 3)", i,
@@ -421,9 +444,8 @@ Status Validator::run(Parsed* out) {
     if (!std::isfinite(p.scale) || !(p.scale > 0.0f)) {
       return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
     }
-    if ((p.flags & ~uint32_t(kFlagNegative)) != 0 || p.target != kTargetLightMap) {
-      return fail(Status::kCorrupt, "patch %u: unknown flags %02x or target %u", i, p.flags,
-                  p.target);
+    if ((p.flags & ~uint32_t(kFlagNegative)) != 0) {
+      return fail(Status::kCorrupt, "patch %u: unknown flags %02x", i, p.flags);
     }
   }
 

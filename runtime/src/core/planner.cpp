@@ -44,11 +44,10 @@ struct Carver {
   }
 };
 
-// Max over the map of the sum of |values| of `count` groups from `groups` (the scratch map is
-// left zeroed).
+// Max over the maps of the sum of |values| of `count` groups from `groups` (the scratch map set
+// is left zeroed). One bound for both targets: the larger of the two maps' maxima.
 float groups_bound(const PackView& pack, const uint32_t* groups, uint32_t count, float* scratch) {
   const float one[3] = {1.0f, 1.0f, 1.0f};
-  const uint32_t w = pack.lightmap_width();
   for (uint32_t i = 0; i < count; ++i) {
     const pack::GroupRecord& g = pack.group(groups[i]);
     add_patches(pack, g.first_patch, g.patch_count, one, scratch, /*absolute=*/true);
@@ -58,8 +57,10 @@ float groups_bound(const PackView& pack, const uint32_t* groups, uint32_t count,
     const pack::GroupRecord& g = pack.group(groups[i]);
     for (uint32_t p = g.first_patch; p < g.first_patch + g.patch_count; ++p) {
       const pack::PatchRecord& pr = pack.patch(p);
+      const uint32_t w = pack.map_width(pr.target);
+      float* map = scratch + pack.map_offset(pr.target) * 3;
       for (uint32_t y = pr.dest_y; y < uint32_t(pr.dest_y + pr.height); ++y) {
-        float* row = scratch + (size_t(y) * w + pr.dest_x) * 3;
+        float* row = map + (size_t(y) * w + pr.dest_x) * 3;
         for (uint32_t k = 0; k < uint32_t(pr.width) * 3; ++k) {
           if (row[k] > m) m = row[k];
           row[k] = 0.0f;
@@ -109,6 +110,8 @@ Status Planner::init(const PackView& pack, const PlannerLimits& limits, Error* e
     Carver c{static_cast<uint8_t*>(block_)};
     group_texels_ = c.take<uint64_t>(ng);
     patch_prefix_ = c.take<uint64_t>(size_t(patch_count) + 1);
+    indirect_prefix_ = c.take<uint64_t>(size_t(patch_count) + 1);
+    group_split_ = c.take<uint32_t>(ng);
     light_since_ = c.take<uint64_t>(nl);
     object_since_ = c.take<uint64_t>(no);
     marked_frame_ = c.take<uint64_t>(ng);
@@ -135,11 +138,15 @@ Status Planner::init(const PackView& pack, const PlannerLimits& limits, Error* e
     }
   }
 
-  clear_texels_ = uint64_t(pack.lightmap_width()) * pack.lightmap_height();
-  patch_prefix_[0] = 0;
+  clear_texels_ = pack.map_texels();
+  indirect_clear_texels_ = uint64_t(pack.indirect_width()) * pack.indirect_height();
+  patch_prefix_[0] = indirect_prefix_[0] = 0;
   for (uint32_t p = 0; p < patch_count; ++p) {
     const pack::PatchRecord& pr = pack.patch(p);
-    patch_prefix_[p + 1] = patch_prefix_[p] + uint64_t(pr.width) * pr.height;
+    const uint64_t area = uint64_t(pr.width) * pr.height;
+    patch_prefix_[p + 1] = patch_prefix_[p] + area;
+    indirect_prefix_[p + 1] =
+        indirect_prefix_[p] + (pr.target == pack::kTargetIndirectMap ? area : 0);
   }
   // Counting sort of the references (groups are sorted by kind, then light: each light's groups
   // come out contribution first).
@@ -147,6 +154,13 @@ Status Planner::init(const PackView& pack, const PlannerLimits& limits, Error* e
     const pack::GroupRecord& gr = pack.group(g);
     group_texels_[g] =
         patch_prefix_[gr.first_patch + gr.patch_count] - patch_prefix_[gr.first_patch];
+    // A group's light-map patches come first (validated), then its indirect-map ones.
+    uint32_t split = gr.first_patch;
+    while (split < gr.first_patch + gr.patch_count &&
+           pack.patch(split).target == pack::kTargetLightMap) {
+      ++split;
+    }
+    group_split_[g] = split;
     marked_frame_[g] = kNotPending;
     if (group_has_light(gr.kind)) ++light_first_[gr.light + 1];
     for (uint32_t k = 0; k < 2; ++k) {
@@ -169,7 +183,7 @@ Status Planner::init(const PackView& pack, const PlannerLimits& limits, Error* e
   }
 
   // Magnitude bounds: B (base and static shadows) and each light's A_l, max over texels.
-  float* scratch = static_cast<float*>(std::calloc(clear_texels_ * 3, sizeof(float)));
+  float* scratch = static_cast<float*>(std::calloc(size_t(clear_texels_) * 3, sizeof(float)));
   uint32_t* fixed = static_cast<uint32_t*>(std::malloc(sizeof(uint32_t) * (ng + 1)));
   if (!scratch || !fixed) {
     std::free(scratch);
@@ -282,36 +296,63 @@ uint64_t Planner::rebuild_texels() const {
   return total;
 }
 
-uint64_t Planner::light_change_texels(uint32_t l) const {
-  uint64_t total = 0;
+TargetTexels Planner::group_cost(uint32_t g) const {
+  const pack::GroupRecord& gr = pack_->group(g);
+  TargetTexels t;
+  t.indirect_map =
+      indirect_prefix_[gr.first_patch + gr.patch_count] - indirect_prefix_[gr.first_patch];
+  t.light_map = group_texels_[g] - t.indirect_map;
+  return t;
+}
+
+TargetTexels Planner::light_change_cost(uint32_t l) const {
+  TargetTexels total;
   for (uint32_t i = light_first_[l]; i < light_first_[l + 1]; ++i) {
     const uint32_t g = light_groups_[i];
     if (light_change_touches(pack_->group(g), l,
                              [&](uint32_t o) { return shown_visible_[o] != 0; })) {
-      total += 2 * group_texels_[g];  // drawn, then presented
+      const TargetTexels t = group_cost(g);  // drawn, then presented
+      total.light_map += 2 * t.light_map;
+      total.indirect_map += 2 * t.indirect_map;
     }
   }
   return total;
 }
 
-uint64_t Planner::object_change_texels(uint32_t o) const {
-  uint64_t total = 0;
+TargetTexels Planner::object_change_cost(uint32_t o) const {
+  TargetTexels total;
   for (uint32_t i = object_first_[o]; i < object_first_[o + 1]; ++i) {
     const uint32_t g = object_groups_[i];
     if (object_change_touches(
             pack_->group(g), o, [&](uint32_t l) { return lit(shown_, l); },
             [&](uint32_t x) { return shown_visible_[x] != 0; })) {
-      total += 2 * group_texels_[g];
+      const TargetTexels t = group_cost(g);
+      total.light_map += 2 * t.light_map;
+      total.indirect_map += 2 * t.indirect_map;
     }
   }
   return total;
 }
 
-void Planner::emit(DrawSink& sink, uint32_t group, uint32_t first, uint32_t count,
-                   const float factor[3], uint64_t texels) {
-  sink.draw(group, first, count, factor);
-  stats_.texels += texels;
+void Planner::count_texels(uint32_t first, uint32_t end) {
+  stats_.texels += patch_prefix_[end] - patch_prefix_[first];
+  stats_.indirect_texels += indirect_prefix_[end] - indirect_prefix_[first];
   ++stats_.draws;
+}
+
+void Planner::emit(DrawSink& sink, uint32_t group, uint32_t first, uint32_t end,
+                   const float factor[3]) {
+  const uint32_t split = group_split_[group];
+  if (first < split) {
+    const uint32_t e = end < split ? end : split;
+    sink.draw(group, first, e - first, factor);
+    count_texels(first, e);
+  }
+  if (end > split) {
+    const uint32_t b = first > split ? first : split;
+    sink.draw(group, b, end - b, factor);
+    count_texels(b, end);
+  }
 }
 
 void Planner::mark_for_present(uint32_t group) {
@@ -324,9 +365,15 @@ void Planner::mark_for_present(uint32_t group) {
 void Planner::present_marked(DrawSink& sink) {
   for (uint32_t i = 0; i < marked_count_; ++i) {
     const pack::GroupRecord& gr = pack_->group(marked_[i]);
-    sink.present(gr.first_patch, gr.patch_count);
-    stats_.texels += group_texels_[marked_[i]];
-    ++stats_.draws;
+    const uint32_t split = group_split_[marked_[i]], end = gr.first_patch + gr.patch_count;
+    if (split > gr.first_patch) {
+      sink.present(gr.first_patch, split - gr.first_patch);
+      count_texels(gr.first_patch, split);
+    }
+    if (end > split) {
+      sink.present(split, end - split);
+      count_texels(split, end);
+    }
   }
   marked_count_ = 0;
   marked_texels_ = 0;
@@ -408,6 +455,7 @@ bool Planner::run_rebuild(uint64_t budget, DrawSink& sink) {
     if (!whole_map_step()) return false;
     sink.clear();
     stats_.texels += clear_texels_;
+    stats_.indirect_texels += indirect_clear_texels_;
     rebuild_left_ -= clear_texels_;
     rebuild_cleared_ = true;
     if (stats_.oversize_steps) return false;
@@ -426,7 +474,7 @@ bool Planner::run_rebuild(uint64_t budget, DrawSink& sink) {
     if (first == end) continue;  // finished by an earlier partial step
     const uint64_t whole = patch_prefix_[end] - patch_prefix_[first];
     if (whole <= room()) {
-      emit(sink, rebuild_group_, first, end - first, f, whole);
+      emit(sink, rebuild_group_, first, end, f);
       rebuild_left_ -= whole;
       continue;
     }
@@ -441,7 +489,7 @@ bool Planner::run_rebuild(uint64_t budget, DrawSink& sink) {
       stats_.oversize_steps = 1;
     }
     const uint64_t texels = patch_prefix_[k] - patch_prefix_[first];
-    emit(sink, rebuild_group_, first, k - first, f, texels);
+    emit(sink, rebuild_group_, first, k, f);
     rebuild_left_ -= texels;
     rebuild_patch_ = k - gr.first_patch;
     return false;
@@ -449,6 +497,7 @@ bool Planner::run_rebuild(uint64_t budget, DrawSink& sink) {
   if (!whole_map_step()) return false;
   sink.present_all();
   stats_.texels += clear_texels_;
+  stats_.indirect_texels += indirect_clear_texels_;
   ++stats_.draws;
   rebuild_left_ -= clear_texels_;
   std::memcpy(shown_, build_, sizeof(Factor) * light_count_);
@@ -496,7 +545,7 @@ bool Planner::apply_light_change(uint32_t l, uint64_t budget, DrawSink& sink, bo
     const uint32_t g = light_groups_[i];
     const pack::GroupRecord& gr = pack_->group(g);
     if (!light_change_touches(gr, l, visible)) continue;
-    emit(sink, g, gr.first_patch, gr.patch_count, d, group_texels_[g]);
+    emit(sink, g, gr.first_patch, gr.first_patch + gr.patch_count, d);
     mark_for_present(g);
   }
   return true;
@@ -536,7 +585,7 @@ bool Planner::apply_object_change(uint32_t o, uint64_t budget, DrawSink& sink, b
     const bool has_light = group_has_light(gr.kind);
     float f[3];
     for (int c = 0; c < 3; ++c) f[c] = sign * (has_light ? shown_[gr.light].rgb[c] : 1.0f);
-    emit(sink, g, gr.first_patch, gr.patch_count, f, group_texels_[g]);
+    emit(sink, g, gr.first_patch, gr.first_patch + gr.patch_count, f);
     mark_for_present(g);
   }
   shown_visible_[o] = want_visible_[o];

@@ -135,18 +135,22 @@ const char* path_name(RecomposePath path) {
   return "?";
 }
 
-// Executes the planner's steps with GL draws: patch draws into the accumulator (additive
-// blending), present steps from it into the sampled map (no blending).
+// Executes the planner's steps with GL draws: patch draws into the target's accumulator (additive
+// blending), present steps from it into the target's sampled map (no blending).
 class GlSink final : public DrawSink {
  public:
   explicit GlSink(Runtime& r) : r_(r) {}
   void clear() override {
-    set_mode(kDraw);
     glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    set_mode(kDraw, pack::kTargetLightMap);
     glClear(GL_COLOR_BUFFER_BIT);
+    if (r_.pack_.has_indirect_map()) {
+      set_mode(kDraw, pack::kTargetIndirectMap);
+      glClear(GL_COLOR_BUFFER_BIT);
+    }
   }
   void draw(uint32_t, uint32_t first, uint32_t count, const float factor[3]) override {
-    set_mode(kDraw);
+    set_mode(kDraw, r_.pack_.patch(first).target);
     // A half-float accumulator holds the presented scale already (runtime.h).
     const float s = r_.path_ == RecomposePath::kGpuHalf ? r_.inverse_scale_ : 1.0f;
     glUniform3f(r_.factor_location_, factor[0] * s, factor[1] * s, factor[2] * s);
@@ -168,12 +172,17 @@ class GlSink final : public DrawSink {
     }
   }
   void present(uint32_t first, uint32_t count) override {
-    set_mode(kPresent);
+    set_mode(kPresent, r_.pack_.patch(first).target);
     draw_quads(first, count);
   }
   void present_all() override {
-    set_mode(kPresent);
-    draw_quads(r_.pack_.patch_count(), 1);  // the full-target quad
+    // The full-target quads follow the patches' quads: the light map's, then the indirect map's.
+    set_mode(kPresent, pack::kTargetLightMap);
+    draw_quads(r_.pack_.patch_count(), 1);
+    if (r_.pack_.has_indirect_map()) {
+      set_mode(kPresent, pack::kTargetIndirectMap);
+      draw_quads(r_.pack_.patch_count() + 1, 1);
+    }
   }
 
  private:
@@ -182,28 +191,37 @@ class GlSink final : public DrawSink {
     glDrawElements(GL_TRIANGLES, GLsizei(count * 6), GL_UNSIGNED_INT,
                    reinterpret_cast<const void*>(uintptr_t(first) * 6 * sizeof(uint32_t)));
   }
-  void set_mode(Mode m) {
-    if (m == mode_) return;
+  void set_mode(Mode m, uint8_t target) {
+    if (m == mode_ && target == target_) return;
+    const bool indirect = target == pack::kTargetIndirectMap;
     if (m == kDraw) {
       if (mode_ == kPresent) {
         glActiveTexture(GL_TEXTURE0 + kAccumulatorUnit);
         glBindTexture(GL_TEXTURE_2D, 0);
       }
-      glBindFramebuffer(GL_FRAMEBUFFER, r_.accumulator_fbo_);
+      glBindFramebuffer(GL_FRAMEBUFFER,
+                        indirect ? r_.indirect_accumulator_fbo_ : r_.accumulator_fbo_);
       glUseProgram(r_.patch_program_);
       glEnable(GL_BLEND);
     } else {
-      glBindFramebuffer(GL_FRAMEBUFFER, r_.light_map_fbo_);
+      glBindFramebuffer(GL_FRAMEBUFFER, indirect ? r_.indirect_map_fbo_ : r_.light_map_fbo_);
       glUseProgram(r_.present_program_);
       glDisable(GL_BLEND);
       glActiveTexture(GL_TEXTURE0 + kAccumulatorUnit);
-      glBindTexture(GL_TEXTURE_2D, r_.accumulator_);
+      glBindTexture(GL_TEXTURE_2D, indirect ? r_.indirect_accumulator_ : r_.accumulator_);
     }
+    // Each target is drawn in its own texels: viewport and the program's target size.
+    const uint32_t w = r_.pack_.map_width(target), h = r_.pack_.map_height(target);
+    glViewport(0, 0, GLsizei(w), GLsizei(h));
+    glUniform2f(m == kDraw ? r_.patch_size_location_ : r_.present_size_location_, float(w),
+                float(h));
     mode_ = m;
+    target_ = target;
   }
 
   Runtime& r_;
   Mode mode_ = kNone;
+  uint8_t target_ = pack::kTargetLightMap;
   int batch_ = -1;
 };
 
@@ -242,6 +260,7 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   for (uint32_t p = pack.patch_count(); p-- > 0;) {
     const pack::PatchRecord& pr = pack.patch(p);
     const bool joins = p + 1 < pack.patch_count() && pack.patch(p + 1).group == pr.group &&
+                       pack.patch(p + 1).target == pr.target &&
                        pack.patch(p + 1).atlas / kUnits == pr.atlas / kUnits;
     run_end_[p] = joins ? run_end_[p + 1] : p + 1;
   }
@@ -260,9 +279,18 @@ Status Runtime::choose_path(Error* error) {
       es_version_at_least(3, 2) || has_extension("GL_EXT_color_buffer_float");
   const bool float_blend = has_extension("GL_EXT_float_blend");
   const bool half_renderable = float_renderable || has_extension("GL_EXT_color_buffer_half_float");
+  const bool indirect = pack_.has_indirect_map();
+  const uint32_t iw = pack_.indirect_width(), ih = pack_.indirect_height();
   path_ = RecomposePath::kCpu;
   if (limits_.force_cpu_fallback) return Status::kOk;
   light_map_fbo_ = make_framebuffer(light_map_);
+  if (indirect && light_map_fbo_) {
+    indirect_map_fbo_ = make_framebuffer(indirect_map_);
+    if (!indirect_map_fbo_) {
+      glDeleteFramebuffers(1, &light_map_fbo_);
+      light_map_fbo_ = 0;
+    }
+  }
   if (!light_map_fbo_) return Status::kOk;
   struct Candidate {
     bool usable;
@@ -275,18 +303,29 @@ Status Runtime::choose_path(Error* error) {
       {half_renderable, GL_RGBA16F, RecomposePath::kGpuHalf}};
   for (const Candidate& c : candidates) {
     if (!c.usable) continue;
+    const uint64_t bytes_per_texel = c.format == GL_RGBA32F ? 16 : 8;
     accumulator_ = make_texture(c.format, w, h, false);
     accumulator_fbo_ = make_framebuffer(accumulator_);
-    if (accumulator_fbo_) {
+    if (indirect && accumulator_fbo_) {
+      indirect_accumulator_ = make_texture(c.format, iw, ih, false);
+      indirect_accumulator_fbo_ = make_framebuffer(indirect_accumulator_);
+    }
+    if (accumulator_fbo_ && (!indirect || indirect_accumulator_fbo_)) {
       path_ = c.path;
-      memory_.accumulator = uint64_t(w) * h * (c.format == GL_RGBA32F ? 16 : 8);
+      memory_.accumulator = uint64_t(w) * h * bytes_per_texel;
+      memory_.indirect_accumulator = uint64_t(iw) * ih * bytes_per_texel;
       return Status::kOk;
     }
-    glDeleteTextures(1, &accumulator_);
-    accumulator_ = 0;
+    const GLuint textures[2] = {accumulator_, indirect_accumulator_};
+    glDeleteTextures(2, textures);
+    const GLuint fbos[2] = {accumulator_fbo_, indirect_accumulator_fbo_};
+    glDeleteFramebuffers(2, fbos);
+    accumulator_ = indirect_accumulator_ = 0;
+    accumulator_fbo_ = indirect_accumulator_fbo_ = 0;
   }
-  glDeleteFramebuffers(1, &light_map_fbo_);
-  light_map_fbo_ = 0;
+  const GLuint fbos[2] = {light_map_fbo_, indirect_map_fbo_};
+  glDeleteFramebuffers(2, fbos);
+  light_map_fbo_ = indirect_map_fbo_ = 0;
   return glGetError() == GL_NO_ERROR
              ? Status::kOk
              : set_error(error, Status::kGlError, "runtime: GL error choosing the render target");
@@ -301,10 +340,14 @@ Status Runtime::create_gl(Error* error) {
   // The map the game samples (linear filtering), then an accumulator the driver can blend into.
   light_map_ = make_texture(GL_RGBA16F, w, h, true);
   memory_.light_map = uint64_t(w) * h * 8;
+  if (pack_.has_indirect_map()) {  // sampled bilinearly, clamped at its edges (pack_format.h)
+    indirect_map_ = make_texture(GL_RGBA16F, pack_.indirect_width(), pack_.indirect_height(), true);
+    memory_.indirect_map = uint64_t(pack_.indirect_width()) * pack_.indirect_height() * 8;
+  }
   if (Status s = choose_path(error); s != Status::kOk) return s;
 
   if (path_ == RecomposePath::kCpu) {
-    const size_t texels = size_t(w) * h;
+    const size_t texels = size_t(pack_.map_texels());
     if (!cpu_accumulator_) {
       cpu_accumulator_ = static_cast<double*>(std::calloc(texels * 3, sizeof(double)));
       cpu_map_ = static_cast<uint16_t*>(std::calloc(texels * 4, sizeof(uint16_t)));
@@ -350,16 +393,18 @@ Status Runtime::create_programs(Error* error) {
   present_program_ = link(shaders::present_vert, shaders::present_frag, error);
   if (!present_program_) return Status::kGlError;
   factor_location_ = glGetUniformLocation(patch_program_, "u_factor");
+  patch_size_location_ = glGetUniformLocation(patch_program_, "u_target_size");
+  present_size_location_ = glGetUniformLocation(present_program_, "u_target_size");
   glUseProgram(patch_program_);
   for (uint32_t u = 0; u < kUnits; ++u) {
     char name[16];
     std::snprintf(name, sizeof name, "u_atlas[%u]", u);
     glUniform1i(glGetUniformLocation(patch_program_, name), GLint(u));
   }
-  glUniform2f(glGetUniformLocation(patch_program_, "u_target_size"), float(w), float(h));
+  glUniform2f(patch_size_location_, float(w), float(h));
   glUseProgram(present_program_);
   glUniform1i(glGetUniformLocation(present_program_, "u_accumulator"), GLint(kAccumulatorUnit));
-  glUniform2f(glGetUniformLocation(present_program_, "u_target_size"), float(w), float(h));
+  glUniform2f(present_size_location_, float(w), float(h));
   // The float accumulator holds irradiance; the half one holds it scaled already.
   glUniform1f(glGetUniformLocation(present_program_, "u_scale"),
               path_ == RecomposePath::kGpuFloat ? inverse_scale_ : 1.0f);
@@ -368,10 +413,10 @@ Status Runtime::create_programs(Error* error) {
 }
 
 Status Runtime::create_buffers(Error* error) {
-  const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
   // Vertex and index buffers: 4 vertices and 6 indices per patch, pack order, plus one
-  // full-target quad at the end (the whole-map present and the fill-rate floor).
-  const uint32_t quads = pack_.patch_count() + 1;
+  // full-target quad at the end (the whole-map present and the fill-rate floor) and, with an
+  // indirect map, its full-target quad.
+  const uint32_t quads = pack_.patch_count() + (pack_.has_indirect_map() ? 2 : 1);
   const size_t vbytes = size_t(quads) * 4 * kVertexBytes;
   const size_t ibytes = size_t(quads) * 6 * sizeof(uint32_t);
   float* vertices = static_cast<float*>(std::malloc(vbytes));
@@ -394,9 +439,11 @@ Status Runtime::create_buffers(Error* error) {
       params[2] = p.channel_count;
       params[3] = p.encoding == pack::kEncodingSquare ? 1.0f : 0.0f;
       unit = float(p.atlas % kUnits);
-    } else {  // the full-target quad, sampling atlas 0 stretched over it (fill-rate floor)
+    } else {  // a full-target quad, sampling atlas 0 stretched over it (fill-rate floor)
       const pack::AtlasRecord& a0 = pack_.atlas(0);
-      dx0 = dy0 = 0.0f, dx1 = float(w), dy1 = float(h);
+      const uint8_t target =
+          q == pack_.patch_count() ? pack::kTargetLightMap : pack::kTargetIndirectMap;
+      dx0 = dy0 = 0.0f, dx1 = float(pack_.map_width(target)), dy1 = float(pack_.map_height(target));
       ax0 = ay0 = 0.0f, ax1 = float(a0.width), ay1 = float(a0.height);
       params[0] = 1.0f, params[1] = 0.0f, params[2] = 3.0f, params[3] = 0.0f;
       unit = 0.0f;
@@ -486,10 +533,11 @@ Status Runtime::probe_rounding(Error* error) {
 
 void Runtime::delete_gl() {
   if (atlas_textures_) glDeleteTextures(GLsizei(pack_.atlas_count()), atlas_textures_);
-  const GLuint textures[2] = {light_map_, accumulator_};
-  glDeleteTextures(2, textures);
-  const GLuint fbos[2] = {light_map_fbo_, accumulator_fbo_};
-  glDeleteFramebuffers(2, fbos);
+  const GLuint textures[4] = {light_map_, accumulator_, indirect_map_, indirect_accumulator_};
+  glDeleteTextures(4, textures);
+  const GLuint fbos[4] = {light_map_fbo_, accumulator_fbo_, indirect_map_fbo_,
+                          indirect_accumulator_fbo_};
+  glDeleteFramebuffers(4, fbos);
   if (vbo_) glDeleteBuffers(1, &vbo_);
   if (ibo_) glDeleteBuffers(1, &ibo_);
   if (vao_) glDeleteVertexArrays(1, &vao_);
@@ -500,8 +548,8 @@ void Runtime::delete_gl() {
 
 void Runtime::forget_gl() {
   if (atlas_textures_) std::memset(atlas_textures_, 0, sizeof(uint32_t) * pack_.atlas_count());
-  light_map_ = accumulator_ = 0;
-  light_map_fbo_ = accumulator_fbo_ = 0;
+  light_map_ = accumulator_ = indirect_map_ = indirect_accumulator_ = 0;
+  light_map_fbo_ = accumulator_fbo_ = indirect_map_fbo_ = indirect_accumulator_fbo_ = 0;
   vbo_ = ibo_ = vao_ = patch_program_ = present_program_ = 0;
 }
 
@@ -580,6 +628,7 @@ void Runtime::set_draw_state() const {
 }
 
 void Runtime::reset_draw_state() const {
+  glViewport(0, 0, GLsizei(width()), GLsizei(height()));  // an indirect target may have set it
   glBindVertexArray(0);
   glUseProgram(0);
   glDisable(GL_BLEND);
@@ -598,12 +647,15 @@ Status Runtime::update(uint64_t budget_texels) {
     CpuSink sink;
     sink.bind(&pack_, cpu_accumulator_, nullptr, cpu_map_, inverse_scale_);
     planner_.update(budget_texels, sink);
-    if (sink.dirty_end() > sink.dirty_begin()) {  // upload the rows that changed
+    for (uint8_t t = pack::kTargetLightMap; t <= pack::kTargetIndirectMap; ++t) {
+      const uint32_t begin = sink.dirty_begin(t), end = sink.dirty_end(t);
+      if (end <= begin) continue;  // upload the rows that changed
+      const uint32_t w = pack_.map_width(t);
       glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-      glBindTexture(GL_TEXTURE_2D, light_map_);
-      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, GLint(sink.dirty_begin()), GLsizei(width()),
-                      GLsizei(sink.dirty_end() - sink.dirty_begin()), GL_RGBA, GL_HALF_FLOAT,
-                      cpu_map_ + size_t(sink.dirty_begin()) * width() * 4);
+      glBindTexture(GL_TEXTURE_2D, t == pack::kTargetLightMap ? light_map_ : indirect_map_);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, GLint(begin), GLsizei(w), GLsizei(end - begin), GL_RGBA,
+                      GL_HALF_FLOAT,
+                      cpu_map_ + (size_t(pack_.map_offset(t)) + size_t(begin) * w) * 4);
       glBindTexture(GL_TEXTURE_2D, 0);
     }
     return gl_status();
@@ -617,20 +669,36 @@ Status Runtime::update(uint64_t budget_texels) {
 
 Status Runtime::read_light_map(float* out, Error* error) const {
   assert(out != nullptr && "read_light_map: null output");
+  return read_map(pack::kTargetLightMap, out, error);
+}
+
+Status Runtime::read_indirect_map(float* out, Error* error) const {
+  assert(out != nullptr && "read_indirect_map: null output");
+  if (open_ && !pack_.has_indirect_map()) {
+    return set_error(error, Status::kInvalidArgument, "runtime: the pack has no indirect map");
+  }
+  return read_map(pack::kTargetIndirectMap, out, error);
+}
+
+Status Runtime::read_map(uint8_t target, float* out, Error* error) const {
   if (!open_) return set_error(error, Status::kInvalidArgument, "runtime: not open");
-  const size_t n = size_t(width()) * height() * 4;
+  const uint32_t w = pack_.map_width(target), h = pack_.map_height(target);
+  const size_t n = size_t(w) * h * 4;
   if (path_ == RecomposePath::kCpu) {
+    const uint16_t* map = cpu_map_ + size_t(pack_.map_offset(target)) * 4;
     for (size_t i = 0; i < n; ++i) {
-      out[i] = (i & 3) == 3 ? 1.0f : half_to_float(cpu_map_[i]) * scale_;
+      out[i] = (i & 3) == 3 ? 1.0f : half_to_float(map[i]) * scale_;
     }
     return Status::kOk;
   }
-  glBindFramebuffer(GL_FRAMEBUFFER, light_map_fbo_);
+  const bool indirect = target == pack::kTargetIndirectMap;
+  glBindFramebuffer(GL_FRAMEBUFFER, indirect ? indirect_map_fbo_ : light_map_fbo_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadPixels(0, 0, GLsizei(width()), GLsizei(height()), GL_RGBA, GL_FLOAT, out);
+  glReadPixels(0, 0, GLsizei(w), GLsizei(h), GL_RGBA, GL_FLOAT, out);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (glGetError() != GL_NO_ERROR) {
-    return set_error(error, Status::kGlError, "runtime: glReadPixels of the light map failed");
+    return set_error(error, Status::kGlError, "runtime: glReadPixels of the %s failed",
+                     indirect ? "indirect map" : "light map");
   }
   for (size_t i = 0; i < n; ++i) {
     if ((i & 3) != 3) out[i] *= scale_;
@@ -646,6 +714,7 @@ Status Runtime::draw_fill_floor(uint64_t texels, Error* error) {
   set_draw_state();
   glEnable(GL_BLEND);
   glUseProgram(patch_program_);
+  glUniform2f(patch_size_location_, float(width()), float(height()));
   glBindFramebuffer(GL_FRAMEBUFFER, accumulator_fbo_);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, atlas_textures_[0]);

@@ -136,6 +136,7 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     f.view_projection =
         glm::perspective(glm::radians(70.0f), aspect, 0.05f, 100.0f) * player.view();
     f.light_map = rt.light_map_texture();
+    f.indirect_map = rt.indirect_map_texture();
     f.object_visible = visible.data();
     f.flame = flames.data();
     f.exposure = o.exposure * rt.light_map_scale();

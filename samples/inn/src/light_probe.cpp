@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lightpatch/indirect_map.h"
 #include "lightpatch/platform/gl.h"
 #include "ray_cast.h"
 #include "world.h"
@@ -76,6 +77,17 @@ float LightProbe::measure(const Runtime& runtime, const std::vector<glm::ivec2>&
     for (const glm::ivec2& t : texels) {
       sum += luminance(
           &whole_map_[(static_cast<size_t>(t.y) * runtime.width() + static_cast<size_t>(t.x)) * 4]);
+    }
+  }
+  if (runtime.indirect_map_texture() != 0) {  // L + I: the indirect map magnified at each texel
+    const uint32_t iw = runtime.indirect_width(), ih = runtime.indirect_height();
+    indirect_.resize(static_cast<size_t>(iw) * ih * 4);
+    if (runtime.read_indirect_map(indirect_.data(), nullptr) != Status::kOk) return -1.0f;
+    for (const glm::ivec2& t : texels) {
+      float rgb[3];
+      sample_indirect(indirect_.data(), 4, iw, ih, runtime.indirect_scale(),
+                      static_cast<uint32_t>(t.x), static_cast<uint32_t>(t.y), rgb);
+      sum += luminance(rgb);
     }
   }
   if (glGetError() != GL_NO_ERROR) return -1.0f;

@@ -2,7 +2,8 @@
 // candle, the wall and floor around a torch), so a scripted run can show that lighting a light
 // brightens the spot in front of it. Texels are found once per light by casting rays from the
 // light down and around onto the static geometry; measuring reads those texels back from the
-// runtime's current light map (a stall: for scripted runs and tests, not for frames).
+// runtime's current light map, plus its indirect map magnified there where the pack has one (a
+// stall: for scripted runs and tests, not for frames).
 #pragma once
 
 #include <cstdint>
@@ -39,6 +40,7 @@ class LightProbe {
  private:
   uint32_t framebuffer_ = 0;
   std::vector<float> whole_map_;  // only when the light map is not readable through a framebuffer
+  std::vector<float> indirect_;   // the indirect map read back (packs with one)
 };
 
 }  // namespace lightpatch::inn

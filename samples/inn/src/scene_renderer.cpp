@@ -39,13 +39,17 @@ void main() {
 const char* const kFragmentShader = R"(#version 300 es
 precision highp float;
 uniform sampler2D u_light_map;
+uniform sampler2D u_indirect_map;
 uniform float u_exposure;
 in vec2 v_lightmap_uv;
 in vec3 v_albedo;
 in vec3 v_emission;
 out vec4 o_color;
 void main() {
-  vec3 irradiance = max(texture(u_light_map, v_lightmap_uv).rgb, vec3(0.0));
+  // L + I (pack_format.h, "Two target maps"): the indirect map's own bilinear filtering magnifies
+  // it; without one it is a black texel.
+  vec3 irradiance = max(texture(u_light_map, v_lightmap_uv).rgb +
+                        texture(u_indirect_map, v_lightmap_uv).rgb, vec3(0.0));
   vec3 radiance = v_albedo * irradiance * 0.31830988 + v_emission;
   vec3 c = 1.0 - exp(-u_exposure * radiance);
   // sRGB transfer curve (the framebuffer is a plain 8-bit one).
@@ -62,6 +66,7 @@ SceneRenderer::~SceneRenderer() {
   if (vao_) glDeleteVertexArrays(1, &vao_);
   if (vbo_) glDeleteBuffers(1, &vbo_);
   if (ibo_) glDeleteBuffers(1, &ibo_);
+  if (black_) glDeleteTextures(1, &black_);
 }
 
 bool SceneRenderer::init(const World& world, char* message, unsigned message_size) {
@@ -78,6 +83,15 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   if (!program_) return false;
   view_projection_location_ = glGetUniformLocation(program_, "u_view_projection");
   light_map_location_ = glGetUniformLocation(program_, "u_light_map");
+  indirect_map_location_ = glGetUniformLocation(program_, "u_indirect_map");
+  // What a pack without an indirect map adds: one black texel.
+  glGenTextures(1, &black_);
+  glBindTexture(GL_TEXTURE_2D, black_);
+  const uint16_t zero[4] = {0, 0, 0, 0};
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, 1, 1, 0, GL_RGBA, GL_HALF_FLOAT, zero);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glBindTexture(GL_TEXTURE_2D, 0);
   exposure_location_ = glGetUniformLocation(program_, "u_exposure");
   flames_location_ = glGetUniformLocation(program_, "u_flames");
 
@@ -140,6 +154,10 @@ void SceneRenderer::draw(const Frame& frame) {
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, frame.light_map);
   glUniform1i(light_map_location_, 0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, frame.indirect_map ? frame.indirect_map : black_);
+  glUniform1i(indirect_map_location_, 1);
+  glActiveTexture(GL_TEXTURE0);
   glBindVertexArray(vao_);
   auto draw_range = [](const IndexRange& r) {
     if (r.count == 0) return;
@@ -151,6 +169,9 @@ void SceneRenderer::draw(const Frame& frame) {
     if (frame.object_visible[o]) draw_range(world_->objects[o].range);
   }
   glBindVertexArray(0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, 0);
   glUseProgram(0);
   glDisable(GL_DEPTH_TEST);

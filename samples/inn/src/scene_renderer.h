@@ -1,5 +1,7 @@
 // SceneRenderer: draws the inn as albedo x light map (plus the glow of emissive flames) into the
-// bound framebuffer. Every GL object is created in init(); draw() creates none.
+// bound framebuffer. Every GL object is created in init(); draw() creates none. The light map is
+// the runtime's light map plus its indirect map where the pack has one (runtime.h), both sampled
+// bilinearly at the same light-map UV.
 //
 // Shading: the light map holds irradiance E (linear, the lights' units); a Lambertian surface of
 // albedo a has radiance a * E / pi. Radiance is exposed, tone mapped (1 - exp(-exposure * L)) and
@@ -28,7 +30,8 @@ class SceneRenderer {
 
   struct Frame {
     glm::mat4 view_projection{1.0f};
-    uint32_t light_map = 0;  // RGBA16F irradiance texture (Runtime::light_map_texture())
+    uint32_t light_map = 0;     // RGBA16F irradiance texture (Runtime::light_map_texture())
+    uint32_t indirect_map = 0;  // Runtime::indirect_map_texture(), 0 when the pack has none
     const uint8_t* object_visible = nullptr;  // [object count]: draw the object?
     const float* flame = nullptr;             // [light count]: glow of the light's flame (0 = out)
     float exposure = 1.0f;
@@ -40,8 +43,9 @@ class SceneRenderer {
  private:
   const World* world_ = nullptr;
   uint32_t program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0;
+  uint32_t black_ = 0;  // 1x1 zero texture sampled as the indirect map of packs without one
   int view_projection_location_ = -1, light_map_location_ = -1, exposure_location_ = -1,
-      flames_location_ = -1;
+      flames_location_ = -1, indirect_map_location_ = -1;
 };
 
 }  // namespace lightpatch::inn

@@ -139,6 +139,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     SceneRenderer::Frame f;
     f.view_projection = projection * view;
     f.light_map = rt.light_map_texture();
+    f.indirect_map = rt.indirect_map_texture();
     f.object_visible = visible.data();
     f.flame = flames.data();
     f.exposure = o.exposure * rt.light_map_scale();
@@ -331,13 +332,21 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   caption = "drift check";
   while (!rt.idle() && frame_no < 1000000) frame("drift_settle", false);
   const float error_bound = rt.stats().error_bound;
-  std::vector<float> incremental(static_cast<size_t>(rt.width()) * rt.height() * 4),
+  // Both maps where the pack has an indirect map: the light map's texels, then the indirect map's.
+  const size_t light_values = static_cast<size_t>(rt.width()) * rt.height() * 4;
+  std::vector<float> incremental(light_values + static_cast<size_t>(rt.indirect_width()) *
+                                                    rt.indirect_height() * 4),
       rebuilt(incremental.size());
   Error read_error;
-  bool drift_read = rt.read_light_map(incremental.data(), &read_error) == Status::kOk;
+  auto read_maps = [&](std::vector<float>& out) {
+    return rt.read_light_map(out.data(), &read_error) == Status::kOk &&
+           (rt.indirect_map_texture() == 0 ||
+            rt.read_indirect_map(out.data() + light_values, &read_error) == Status::kOk);
+  };
+  bool drift_read = read_maps(incremental);
   rt.request_rebuild();
   while (!rt.idle() && frame_no < 1000000) frame("drift_rebuild", false);
-  drift_read = drift_read && rt.read_light_map(rebuilt.data(), &read_error) == Status::kOk;
+  drift_read = drift_read && read_maps(rebuilt);
   float drift_max = 0.0f, map_max = 0.0f, drift_relative = 0.0f;
   for (size_t k = 0; k < rebuilt.size(); ++k) {
     if (k % 4 == 3) continue;
@@ -414,10 +423,14 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   summary["gpu_path"] = rt.gpu_path();
   summary["path"] = path_name(rt.path());
   summary["renderer"] = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  summary["runtime_memory_bytes"] = {
-      {"atlases", m.atlases},           {"light_map", m.light_map},
-      {"accumulator", m.accumulator},   {"vertex_buffer", m.vertex_buffer},
-      {"index_buffer", m.index_buffer}, {"cpu_fallback", m.cpu_fallback}};
+  summary["runtime_memory_bytes"] = {{"atlases", m.atlases},
+                                     {"light_map", m.light_map},
+                                     {"accumulator", m.accumulator},
+                                     {"indirect_map", m.indirect_map},
+                                     {"indirect_accumulator", m.indirect_accumulator},
+                                     {"vertex_buffer", m.vertex_buffer},
+                                     {"index_buffer", m.index_buffer},
+                                     {"cpu_fallback", m.cpu_fallback}};
   summary["game_geometry_bytes"] =
       s.world.vertices.size() * sizeof(WorldVertex) + s.world.indices.size() * 4;
   summary["frames"] = frames.size();

@@ -51,7 +51,7 @@ struct BakeOptions {
   // production 2 / 1024 / 1. The level is the size (texels per axis, 1, 2, 4 or 8) of the coarse
   // texels on which bounce light is computed; denoise passes step 1, 2 and 4 coarse texels.
   int gather_rays = 0;     // rays per coarse texel; 0 = preset
-  int indirect_level = 0;  // 1, 2, 4 or 8; 0 = preset
+  int indirect_scale = 0;  // 1, 2, 4 or 8; 0 = preset
   int denoise = -1;        // a-trous passes, 0..3; < 0 = preset
   // The effect plan (DESIGN.md, "Only what the scene calls for"). false forces everything on, to
   // measure what the plan saves: bounce light for every light group, every object's change to it
@@ -84,6 +84,7 @@ class GatherStore;  // src/indirect/integrator.h: gather rays kept between proce
 struct GroupBake {
   size_t group = 0;
   FloatImage map;                                   // B (group 0) or C_l
+  FloatImage indirect;                              // its block image (BakedMaps), or empty
   std::vector<ShadowMap> shadows;                   // a light group's kept S_ol
   std::vector<PairCorrectionMap> pair_corrections;  // a light group's kept corrections
   std::vector<StaticShadowMap> static_shadows;      // group 0's kept static shadows

@@ -31,6 +31,11 @@ struct PreparedScene {
   TexelSet texels;
 };
 
+// The layout alignment a bake's options call for (LayoutOptions::align, the pack's indirect
+// scale): BakeOptions::indirect_scale when given; otherwise 2 with bounce light on (1 if the
+// preset's gather level is 1), 1 without.
+int layout_align(const BakeOptions& bake);
+
 // Layout, tracer and texels for an imported scene; scene and layout statistics into `report`.
 PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress& progress,
                             Report& report);

@@ -1,7 +1,7 @@
 // A light group's baked maps as a file (a cook job's result, cook_jobs.h): the one definition of
 // the format, its writer and its checked reader.
 //
-// Format version 1, little-endian, no padding between records:
+// Format version 2, little-endian, no padding between records:
 //   header (64 bytes, GroupFileHeader)
 //   map_count map records, each a MapRecord (40 bytes) followed by
 //     - a bit mask of ceil(n / 8) bytes, n = rect_w * rect_h * channels: bit i (least
@@ -12,6 +12,9 @@
 //     clear, is +0.0. The writer stores the smallest rectangle outside which every value's bits
 //     are zero: a shadow in a corner costs its corner, unlit and unused texels a bit each, and
 //     the maps come back bit for bit.
+//     A map with an indirect part (BakedMaps: its bounce light as a block image, the light map /
+//     Layout::align, 3 channels) has indirect = 1, and the part follows as one more record of
+//     the same owner with indirect = 2, its mask and values (not counted in map_count).
 //   decision_count decision records, each a DecisionRecord (48 bytes) followed by reason_bytes
 //     bytes of UTF-8 (the reason, no terminator).
 // The header's crc is the CRC-32 (pack_view.h's) of the whole file read with the crc field as
@@ -38,7 +41,7 @@
 namespace lightpatch::cooker {
 
 constexpr char kGroupFileMagic[8] = {'L', 'P', 'G', 'R', 'O', 'U', 'P', '\0'};
-constexpr uint32_t kGroupFileVersion = 1;
+constexpr uint32_t kGroupFileVersion = 2;
 
 struct GroupFileHeader {
   char magic[8];            // kGroupFileMagic
@@ -63,7 +66,7 @@ struct MapRecord {
   uint16_t rect_x, rect_y;  // the stored rectangle
   uint16_t rect_w, rect_h;
   uint16_t channels;  // 1 or 3
-  uint16_t reserved;  // 0
+  uint16_t indirect;  // 0 none, 1 the map's indirect part follows, 2 this record is that part
   uint64_t nonzero;   // values stored after the mask
 };
 static_assert(sizeof(MapRecord) == 40);
@@ -89,8 +92,11 @@ struct GroupFileExpect {
   std::array<uint8_t, 16> job_hash{};
   size_t group = 0;
   int width = 0, height = 0;  // the light map
-  size_t objects = 0;         // Scene::objects
-  size_t lights = 0;          // Scene::lights
+  // The indirect parts' block images (Layout::align > 1: the light map / align), else 0 (a file
+  // with an indirect part is refused).
+  int indirect_width = 0, indirect_height = 0;
+  size_t objects = 0;  // Scene::objects
+  size_t lights = 0;   // Scene::lights
   // Most maps the group can have (its own, one per object it may shadow, one per pair of its
   // candidates): bounds what a file can make the reader allocate.
   size_t max_maps = 1;

@@ -59,16 +59,27 @@ struct LayoutOptions {
   int lightmap_size = 0;         // > 0: fixed page size (texels, square); 0 = derive from density
   float texels_per_unit = 0.0f;  // > 0: texels per metre; 0 = default for a room-sized scene
   int border_texels = 2;         // empty texels around each chart
+  // Blocks of align x align texels (the pack's indirect scale: 1, 2, 4 or 8): every chart's and
+  // every node's rectangle starts and ends on a block boundary with at least one block of border
+  // of its own, and the page is a whole number of blocks, so the indirect map's bilinear
+  // interpolation never mixes two charts (pack_format.h, "Two target maps"). A fixed
+  // lightmap_size must be a multiple of it when align_required; otherwise (--indirect-scale auto)
+  // the alignment halves until the charts fit the page, and Layout::align says what it became.
+  int align = 1;
+  bool align_required = false;
   int max_lightmap_size = 4096;
   UnwrapMode unwrap = UnwrapMode::kAuto;
 };
 
 struct Layout {
-  int width = 0, height = 0;       // texels
-  float texels_per_unit = 0;       // the density actually used (may be lowered to fit)
-  bool verbatim_uv1 = false;       // one TEXCOORD_1 layout over the whole scene, used as it is
-  int uv1_regions = 0;             // nodes placed by their own TEXCOORD_1 (scale and offset)
-  int unwrapped_regions = 0;       // nodes the cooker unwrapped
+  int width = 0, height = 0;  // texels
+  float texels_per_unit = 0;  // the density actually used (may be lowered to fit)
+  bool verbatim_uv1 = false;  // one TEXCOORD_1 layout over the whole scene, used as it is
+  int uv1_regions = 0;        // nodes placed by their own TEXCOORD_1 (scale and offset)
+  int unwrapped_regions = 0;  // nodes the cooker unwrapped
+  // Texels per block the charts are laid out on (LayoutOptions::align, after any lowering): the
+  // scale of the pack's indirect map (1: none). The page is a whole number of blocks.
+  int align = 1;
   std::vector<MeshLayout> meshes;  // parallel to Scene::meshes
   std::vector<Region> regions;
   std::vector<SeamEdge> seams;

@@ -21,9 +21,10 @@ struct FloatImage {
 // DESIGN.md, "The method in one screen". Contribution and shadow maps are for colour (1,1,1)
 // and intensity 1; one channel where the light's transport is grey, three where bounce tints it.
 struct ShadowMap {
-  int light = 0;   // index into BakedMaps::lights (semi-dynamic lights)
-  int object = 0;  // Scene::objects index
-  FloatImage map;  // S_ol = C_l - T_ol (may be negative)
+  int light = 0;        // index into BakedMaps::lights (semi-dynamic lights)
+  int object = 0;       // Scene::objects index
+  FloatImage map;       // S_ol = C_l - T_ol (may be negative)
+  FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
 };
 
 // What object o changes in the static lights' light: B − B_o, B_o being the static lights with o
@@ -31,6 +32,7 @@ struct ShadowMap {
 struct StaticShadowMap {
   int object = 0;  // Scene::objects index
   FloatImage map;
+  FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
 };
 
 // Light that both objects block from light l, which S_al + S_bl removes twice: added back with
@@ -40,6 +42,7 @@ struct PairCorrectionMap {
   int object_a = 0;  // Scene::objects, object_a < object_b
   int object_b = 0;
   FloatImage map;
+  FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
 };
 
 struct BakedMaps {
@@ -55,7 +58,13 @@ struct BakedMaps {
   FloatImage base;                       // B, 3 channels
   std::vector<int> lights;               // Scene::lights index of each semi-dynamic light
   std::vector<FloatImage> contribution;  // C_l, parallel to lights
-  std::vector<ShadowMap> shadows;        // kept pairs only
+  // Bounce light on blocks (Layout::align > 1, pack_format.h "Two target maps"): every map above
+  // and below holds its bounce part magnified from a block image, (width / align) x
+  // (height / align) x 3, which the pack stores as the map's indirect part (its light-map part
+  // is the rest). Empty images where a map has no bounce part or the layout has no blocks.
+  FloatImage base_indirect;
+  std::vector<FloatImage> contribution_indirect;    // parallel to contribution
+  std::vector<ShadowMap> shadows;                   // kept pairs only
   std::vector<PairCorrectionMap> pair_corrections;  // overlapping shadows that matter
   std::vector<StaticShadowMap> static_shadows;      // what objects change in the static light
 };

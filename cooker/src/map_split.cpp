@@ -1,0 +1,72 @@
+#include "map_split.h"
+
+#include <algorithm>
+
+#include "lightpatch/cooker/texel_builder.h"
+#include "lightpatch/indirect_map.h"
+#include "lightpatch/patch_decode.h"
+
+namespace lightpatch::cooker {
+
+std::vector<Region> coarse_regions(const std::vector<Region>& regions, int scale, int width,
+                                   int height) {
+  std::vector<Rect> rects;
+  for (const Region& r : regions) {
+    const int x0 = std::clamp(r.rect.x / scale, 0, width);
+    const int y0 = std::clamp(r.rect.y / scale, 0, height);
+    const int x1 = std::clamp((r.rect.x + r.rect.w + scale - 1) / scale, 0, width);
+    const int y1 = std::clamp((r.rect.y + r.rect.h + scale - 1) / scale, 0, height);
+    if (x1 > x0 && y1 > y0) rects.push_back(Rect{x0, y0, x1 - x0, y1 - y0});
+  }
+  // Charts laid out on whole blocks never overlap here; UVs used as they are may.
+  auto overlap = [](const Rect& a, const Rect& b) {
+    return a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
+  };
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t i = 0; i < rects.size() && !merged; ++i)
+      for (size_t j = i + 1; j < rects.size() && !merged; ++j) {
+        if (!overlap(rects[i], rects[j])) continue;
+        const Rect& a = rects[i];
+        const Rect& b = rects[j];
+        const int x0 = std::min(a.x, b.x), y0 = std::min(a.y, b.y);
+        const int x1 = std::max(a.x + a.w, b.x + b.w), y1 = std::max(a.y + a.h, b.y + b.h);
+        rects[i] = Rect{x0, y0, x1 - x0, y1 - y0};
+        rects.erase(rects.begin() + std::ptrdiff_t(j));
+        merged = true;
+      }
+  }
+  std::vector<Region> out(rects.size());
+  for (size_t i = 0; i < rects.size(); ++i) out[i].rect = rects[i];
+  return out;
+}
+
+void add_decoded(const SourcePatch& patch, const QuantizedPatch& q, FloatImage& map) {
+  const float sign = patch.negative ? -1.0f : 1.0f;
+  const Rect& r = patch.dest;
+  for (int y = 0; y < r.h; ++y)
+    for (int x = 0; x < r.w; ++x)
+      for (int c = 0; c < map.channels; ++c) {
+        const int pc = patch.channels == 1 ? 0 : c;
+        const uint8_t code = q.codes[(size_t(y) * r.w + x) * size_t(patch.channels) + size_t(pc)];
+        map.at(r.x + x, r.y + y, c) += sign * q.scale * patch_decode_unit(code, q.encoding);
+      }
+}
+
+FloatImage light_map_part(const FloatImage& map, const FloatImage& coarse, int scale,
+                          const Scene& scene, const Layout& layout, const TexelSet& texels) {
+  FloatImage out(map.width, map.height, map.channels);
+  const uint32_t s = uint32_t(scale);
+  for (int y = 0; y < map.height; ++y)
+    for (int x = 0; x < map.width; ++x) {
+      if (!texels.valid[texels.index(x, y)]) continue;
+      float v[3];
+      sample_indirect(coarse.data.data(), uint32_t(coarse.channels), uint32_t(coarse.width),
+                      uint32_t(coarse.height), s, uint32_t(x), uint32_t(y), v);
+      for (int c = 0; c < map.channels; ++c) out.at(x, y, c) = map.at(x, y, c) - v[c];
+    }
+  finalize_map(out, scene, layout, texels);
+  return out;
+}
+
+}  // namespace lightpatch::cooker
