@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/indirect_map.h"
 #include "lightpatch/patch_decode.h"
 
@@ -53,19 +52,16 @@ void add_decoded(const SourcePatch& patch, const QuantizedPatch& q, FloatImage& 
       }
 }
 
-FloatImage light_map_part(const FloatImage& map, const FloatImage& coarse, int scale,
-                          const Scene& scene, const Layout& layout, const TexelSet& texels) {
-  FloatImage out(map.width, map.height, map.channels);
+FloatImage light_map_part(const FloatImage& map, const FloatImage& coarse, int scale) {
+  FloatImage out = map;
   const uint32_t s = uint32_t(scale);
   for (int y = 0; y < map.height; ++y)
     for (int x = 0; x < map.width; ++x) {
-      if (!texels.valid[texels.index(x, y)]) continue;
       float v[3];
       sample_indirect(coarse.data.data(), uint32_t(coarse.channels), uint32_t(coarse.width),
                       uint32_t(coarse.height), s, uint32_t(x), uint32_t(y), v);
-      for (int c = 0; c < map.channels; ++c) out.at(x, y, c) = map.at(x, y, c) - v[c];
+      for (int c = 0; c < map.channels; ++c) out.at(x, y, c) -= v[c];
     }
-  finalize_map(out, scene, layout, texels);
   return out;
 }
 

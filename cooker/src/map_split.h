@@ -1,17 +1,15 @@
 // Two-level storage of a map (pack_format.h, "Two target maps"): its bounce part on the indirect
 // map, 1/s of the light map's resolution per axis (the block image the bake magnified), and on
 // the light map the rest: the map less the indirect map's magnification (direct light, and
-// wherever the magnification mixes two charts). The light-map part is taken against the
-// quantized indirect part, so light map + magnified indirect map gives back the baked map to the
-// light map's own 8-bit rounding.
+// wherever the magnification differs from the finalized map: chart edges, seams). The light-map
+// part is taken against the quantized indirect part, so light map + magnified indirect map gives
+// back the baked map to the light map's own 8-bit rounding.
 #pragma once
 
 #include <vector>
 
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/maps.h"
-#include "lightpatch/cooker/scene.h"
-#include "lightpatch/cooker/texels.h"
 #include "patch_extract.h"
 #include "quantize.h"
 
@@ -26,12 +24,10 @@ std::vector<Region> coarse_regions(const std::vector<Region>& regions, int scale
 // 1-channel patch adds its grey value to all three), at the patch's destination.
 void add_decoded(const SourcePatch& patch, const QuantizedPatch& q, FloatImage& map);
 
-// The light-map part of a map whose indirect part is `coarse` (3 channels, map size / s): the map
-// less the magnified indirect part (indirect_map.h) at the valid texels, then finalized like
-// every map (finalize_map: the unused texels dilated from the valid ones, seams stitched), so
-// that light map + magnified indirect map is continuous where the runtime filters across a
-// chart's edge. A 1-channel map takes the coarse map's first channel.
-FloatImage light_map_part(const FloatImage& map, const FloatImage& coarse, int scale,
-                          const Scene& scene, const Layout& layout, const TexelSet& texels);
+// The light-map part of a map whose indirect part is `coarse` (3 channels, map size / s): the
+// (finalized) map less the magnified indirect part (indirect_map.h), at every texel, so that
+// light map + magnified indirect map is the finalized map wherever the runtime filters, chart
+// edges and seams included. A 1-channel map takes the coarse map's first channel.
+FloatImage light_map_part(const FloatImage& map, const FloatImage& coarse, int scale);
 
 }  // namespace lightpatch::cooker

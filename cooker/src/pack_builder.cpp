@@ -236,9 +236,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   // patches) plus light-map patches of the rest, the map less the block image's magnification
   // (map_split.h), where that takes fewer atlas texels than light-map patches alone.
   const int scale = layout.align;
-  const bool can_split = scale > 1 && layout.width % scale == 0 && layout.height % scale == 0 &&
-                         options.texels && options.texels->width == layout.width &&
-                         options.texels->height == layout.height;
+  const bool can_split = scale > 1 && layout.width % scale == 0 && layout.height % scale == 0;
   const int coarse_w = can_split ? layout.width / scale : 0;
   const int coarse_h = can_split ? layout.height / scale : 0;
   const std::vector<Region> coarse =
@@ -265,6 +263,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     uint64_t plain = 0, detail = 0, indirect = 0;  // atlas channel-texels (gutters included)
   };
   std::vector<SplitDecision> split(jobs.size());
+  std::vector<std::vector<SourcePatch>> split_patches(jobs.size());  // light-map + indirect parts
+  std::vector<ColourDecision> split_colour(jobs.size());
   parallel_for(int(jobs.size()), threads, [&](int i) {
     const MapJob& j = jobs[size_t(i)];
     // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
@@ -292,38 +292,55 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         n += uint64_t(p.dest.w + 2) * uint64_t(p.dest.h + 2) * p.channels;
       return n;
     };
-    std::vector<SourcePatch> plain;
+    std::vector<SourcePatch>& plain = per_job[size_t(i)];
     cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)]);
     SplitDecision& sd = split[size_t(i)];
     sd.plain = cost(plain);
-    if (can_split && j.indirect && !j.indirect->data.empty() && !plain.empty()) {
-      ColourDecision dsplit;
+    if (can_split && j.indirect && !j.indirect->data.empty()) {
       std::vector<SourcePatch> indirect;
       // A grey map's bounce part is grey too (one channel where the bounce is untinted).
-      cut(*j.indirect, coarse, kTargetIndirectMap, indirect, dsplit);
-      std::vector<QuantizedPatch> indirect_q(indirect.size());
+      cut(*j.indirect, coarse, kTargetIndirectMap, indirect, split_colour[size_t(i)]);
+      std::vector<QuantizedPatch>& indirect_q = per_job_q[size_t(i)];
+      indirect_q.resize(indirect.size());
       FloatImage decoded(coarse_w, coarse_h, 3);
       for (size_t k = 0; k < indirect.size(); ++k) {
         indirect_q[k] = quantize_patch(indirect[k], options.encoding);
         add_decoded(indirect[k], indirect_q[k], decoded);
       }
-      std::vector<SourcePatch> detail;
-      cut(light_map_part(*j.map, decoded, scale, scene, layout, *options.texels), layout.regions,
-          kTargetLightMap, detail, dsplit);
+      std::vector<SourcePatch>& detail = split_patches[size_t(i)];
+      cut(light_map_part(*j.map, decoded, scale), layout.regions, kTargetLightMap, detail,
+          split_colour[size_t(i)]);
       sd.detail = cost(detail);
       sd.indirect = cost(indirect);
-      if (sd.detail + sd.indirect < sd.plain) {
-        sd.split = true;
-        colour[size_t(i)] = dsplit;
-        // A group's light-map patches first, then its indirect ones (pack_format.h).
-        for (SourcePatch& p : indirect) detail.push_back(std::move(p));
-        per_job[size_t(i)] = std::move(detail);
-        per_job_q[size_t(i)] = std::move(indirect_q);
-        return;
-      }
+      // A group's light-map patches first, then its indirect ones (pack_format.h).
+      for (SourcePatch& p : indirect) detail.push_back(std::move(p));
     }
-    per_job[size_t(i)] = std::move(plain);
   });
+  // One choice per light group (the base map with the static shadows; a light's C_l with its
+  // S_ol and pair corrections): the runtime clamps each presented map at zero, and a state's
+  // light-map part and indirect part are each non-negative only if every map of a light is
+  // split alike (the indirect part then is the state's bounce light, the light-map part its
+  // direct light).
+  std::map<int, uint64_t> group_plain, group_split;
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const bool splittable = can_split && jobs[i].indirect && !jobs[i].indirect->data.empty();
+    group_plain[jobs[i].prototype.light] += split[i].plain;
+    group_split[jobs[i].prototype.light] +=
+        splittable ? split[i].detail + split[i].indirect : split[i].plain;
+  }
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const int g = jobs[i].prototype.light;
+    const bool split_group =
+        can_split && (options.always_split || group_split[g] < group_plain[g]);
+    if (!split_group || !jobs[i].indirect || jobs[i].indirect->data.empty()) {
+      per_job_q[i].clear();
+      continue;
+    }
+    split[i].split = true;
+    per_job[i] = std::move(split_patches[i]);
+    colour[i] = split_colour[i];
+  }
+  split_patches.clear();
   std::vector<SourcePatch> patches;
   std::vector<QuantizedPatch> quantized;
   std::vector<uint8_t> to_quantize;

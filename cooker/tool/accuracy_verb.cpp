@@ -824,7 +824,6 @@ int verb_accuracy(Args& args) {
     Report report;
     PackOptions pack_options;
     pack_options.encoding = setting.encoding;
-    pack_options.texels = &prepared->texels;
     const std::vector<uint8_t> pack =
         build_pack(scene, prepared->layout, reuse->maps, pack_options, report);
     row.cook_s = reuse->seconds + since(t);
@@ -877,7 +876,6 @@ int verb_accuracy(Args& args) {
       Report report;
       PackOptions pack_options;
       pack_options.encoding = e;
-      pack_options.texels = &ref_layout.texels;
       const std::vector<uint8_t> pack =
           build_pack(scene, ref_layout.layout, source->maps, pack_options, report);
       RuntimeRow cpu;

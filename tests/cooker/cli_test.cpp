@@ -268,6 +268,11 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
   EXPECT_FALSE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("c.lpk")));
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--indirect-scale", "3"}, kFast),
                  "--indirect-scale", "");
+  // A scale asked for is kept or refused, never lowered (auto lowers it to fit).
+  expect_failure(dir,
+                 {"cook", scene, "-o", dir.file("x.lpk"), "--quality", "draft", "--lightmap-size",
+                  "36", "--indirect-scale", "8"},
+                 "not a multiple of the indirect scale 8", "");
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--integrator", "vpl"}, kFast),
                  "integrator", "");
   const std::string out = dir.file("out.lpk");

@@ -142,9 +142,7 @@ std::vector<uint8_t> CookJobs::assemble(std::vector<GroupBake> results, Progress
   BakedMaps maps = session_->assemble(std::move(results), report);
   finalize_maps(maps, p_, progress, report);
   progress.begin("pack", 1);
-  PackOptions po = pack_options(bake_);
-  po.texels = &p_.texels;
-  std::vector<uint8_t> pack = build_pack(p_.scene, p_.layout, maps, po, report);
+  std::vector<uint8_t> pack = build_pack(p_.scene, p_.layout, maps, pack_options(bake_), report);
   report.stage_time("pack", progress.end());
   if (maps_out) *maps_out = std::move(maps);
   return pack;

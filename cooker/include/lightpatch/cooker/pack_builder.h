@@ -11,7 +11,6 @@
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/scene.h"
-#include "lightpatch/cooker/texels.h"
 
 namespace lightpatch::cooker {
 
@@ -26,10 +25,9 @@ struct PackOptions {
   // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step
   // (the effect plan forced on, `cook --no-plan`).
   bool keep_colour = false;
-  // The layout's texels (not owned; may be null): maps with an indirect part (BakedMaps) are
-  // stored split only with them, since their light-map part is finalized like every map
-  // (finalize_map: dilated and stitched from its valid texels).
-  const TexelSet* texels = nullptr;
+  // Store every light group that has an indirect part split into its indirect-map and light-map
+  // parts, whatever it costs (otherwise chosen per light group by atlas texels).
+  bool always_split = false;
 };
 
 // Builds the pack bytes. Statistics and the encoding decision go into `report`.
