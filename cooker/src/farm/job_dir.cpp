@@ -328,11 +328,12 @@ PlannedJobs plan_job_dir(const std::string& dir, const CookSettings& settings, P
                          Report& report) {
   CookSettings s = settings;
   s.scene_path = fs::absolute(s.scene_path).lexically_normal().string();
+  // The folder only once the scene has imported and planned: a bad scene leaves nothing behind.
+  const Replanned r = replan(dir, s, s.bake.threads, false, progress, report);
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "jobs", ec);
   if (!ec) fs::create_directories(fs::path(dir) / "results", ec);
   if (ec) throw CookError("cannot create the job folder '" + dir + "': " + ec.message());
-  const Replanned r = replan(dir, s, s.bake.threads, false, progress, report);
   const std::vector<CookJob> jobs = r.all();
   const json settings_j = settings_json(s);
   json list = json::array();
