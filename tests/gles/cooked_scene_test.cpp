@@ -166,7 +166,6 @@ TEST_P(CookedScene, GlesRecomposeMatchesTheCpuReference) {
   ASSERT_FALSE(::testing::Test::HasFatalFailure());
   Runtime& runtime = r.runtime;
   CpuRecomposer& cpu = r.cpu;
-  Error error;
   ASSERT_TRUE(runtime.gpu_path());
   std::mt19937 rng(23 + GetParam());
   const size_t n = size_t(c_.pack.map_texels());  // both maps where the pack has two
