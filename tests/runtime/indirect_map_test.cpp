@@ -66,8 +66,9 @@ TEST(IndirectMap, PacksWithAnIndirectMapOpenAtEveryScale) {
     EXPECT_GT(indirect, 0u);
     EXPECT_LT(indirect, v.patch_count());
   }
+  const SyntheticPack plain_pack = make_synthetic_pack(SyntheticOptions{});  // outlives the view
   PackView plain;
-  ASSERT_EQ(open_message(make_synthetic_pack(SyntheticOptions{}), &plain), "");
+  ASSERT_EQ(open_message(plain_pack, &plain), "");
   EXPECT_FALSE(plain.has_indirect_map());
   EXPECT_EQ(plain.indirect_width(), 0u);
   EXPECT_EQ(plain.map_texels(), 48u * 40u);

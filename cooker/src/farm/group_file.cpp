@@ -87,7 +87,7 @@ void put_image(std::vector<uint8_t>& out, uint32_t role, int light, int object, 
   out.insert(out.end(), mask.begin(), mask.end());
   const size_t at = out.size();
   out.resize(at + values.size() * sizeof(float));
-  std::memcpy(out.data() + at, values.data(), values.size() * sizeof(float));
+  if (!values.empty()) std::memcpy(out.data() + at, values.data(), values.size() * sizeof(float));
 }
 
 // A map and, when it has one, its indirect part (the block image, BakedMaps) after it.
