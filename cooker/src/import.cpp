@@ -7,12 +7,17 @@
 #define TINYGLTF_NO_STB_IMAGE_WRITE
 #include <tiny_gltf.h>
 
+#include <limits.h>
+#include <stb_image.h>
+#include <stdlib.h>
+
 #include <draco/compression/decode.h>
 #include <draco/core/decoder_buffer.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -22,8 +27,10 @@
 #include <set>
 #include <string_view>
 
+#include "json_depth.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/printable.h"
 
 namespace lightpatch::cooker {
 namespace {
@@ -40,19 +47,21 @@ const std::set<std::string>& supported_required() {
   return s;
 }
 
-std::string quoted(const std::string& s) {
-  return "'" + s + "'";
-}
-
 std::string node_label(const tinygltf::Model& model, int node) {
   const std::string& n = model.nodes[size_t(node)].name;
-  return "node " + std::to_string(node) + (n.empty() ? std::string() : " " + quoted(n));
+  return "node " + std::to_string(node) + (n.empty() ? std::string() : " " + quote(n));
 }
 
 std::string mesh_label(const tinygltf::Model& model, int mesh, int prim) {
   const std::string& n = model.meshes[size_t(mesh)].name;
-  return "mesh " + std::to_string(mesh) + (n.empty() ? std::string() : " " + quoted(n)) +
+  return "mesh " + std::to_string(mesh) + (n.empty() ? std::string() : " " + quote(n)) +
          " primitive " + std::to_string(prim);
+}
+
+std::string text_of(const glm::vec3& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(v.x), double(v.y), double(v.z));
+  return buf;
 }
 
 bool finite(const glm::vec3& v) {
@@ -61,6 +70,12 @@ bool finite(const glm::vec3& v) {
 
 float srgb_to_linear(float c) {
   return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+// [offset, offset + length) lies inside [0, size), without overflow (offsets come from the file
+// and can be anything up to 2^64 - 1).
+bool range_inside(uint64_t offset, uint64_t length, uint64_t size) {
+  return offset <= size && length <= size - offset;
 }
 
 // ---- accessors -------------------------------------------------------------------------------
@@ -169,17 +184,18 @@ std::vector<double> read_accessor(const tinygltf::Model& model, int index, int w
   const uint64_t elem = uint64_t(csize) * uint64_t(comps);
   const uint64_t stride = view.byteStride ? uint64_t(view.byteStride) : elem;
   if (stride < elem) throw CookError(label + " has a byteStride smaller than its element");
-  const uint64_t view_end = uint64_t(view.byteOffset) + uint64_t(view.byteLength);
-  if (view_end > data.size())
+  if (!range_inside(view.byteOffset, view.byteLength, data.size()))
     throw CookError(label + ": bufferView " + std::to_string(acc.bufferView) +
                     " extends past the end of buffer " + std::to_string(view.buffer) +
                     " (missing or truncated buffer data)");
   if (count == 0) return {};
-  const uint64_t start = uint64_t(view.byteOffset) + uint64_t(acc.byteOffset);
   if (uint64_t(count) > (uint64_t(1) << 40) / stride)
     throw CookError(label + " has an absurd count");
-  const uint64_t end = start + (uint64_t(count) - 1) * stride + elem;
-  if (end > view_end) throw CookError(label + " reads past the end of its bufferView");
+  // Both terms are bounded now (count * stride <= 2^40, the view inside the buffer): no overflow.
+  const uint64_t span = (uint64_t(count) - 1) * stride + elem;
+  if (!range_inside(acc.byteOffset, span, view.byteLength))
+    throw CookError(label + " reads past the end of its bufferView");
+  const uint64_t start = uint64_t(view.byteOffset) + uint64_t(acc.byteOffset);
   // Allocated only now that the buffer's real size bounds the count.
   std::vector<double> out(count * size_t(comps), 0.0);
   for (size_t i = 0; i < count; ++i) {
@@ -259,7 +275,7 @@ RawPrimitive read_draco(const tinygltf::Model& model, const tinygltf::Value& ext
   if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size())
     throw CookError(dl + ": bufferView " + std::to_string(bv) + " refers to a missing buffer");
   const auto& data = model.buffers[size_t(view.buffer)].data;
-  if (uint64_t(view.byteOffset) + uint64_t(view.byteLength) > data.size())
+  if (!range_inside(view.byteOffset, view.byteLength, data.size()))
     throw CookError(dl + ": bufferView " + std::to_string(bv) +
                     " extends past the end of its buffer (missing or truncated buffer data)");
   draco::DecoderBuffer buffer;
@@ -357,35 +373,6 @@ void check_glb_container(const uint8_t* data, size_t size, const std::string& na
               std::to_string(length - json_end - 8) + " are left");
 }
 
-// tinygltf turns `extras` and `extensions` into its Value tree recursively, one stack frame per
-// level of nesting, so a deeply nested file overflows the stack. glTF itself nests a few levels;
-// refuse anything absurd before tinygltf sees it.
-constexpr int kMaxJsonDepth = 256;
-
-void check_json_depth(const char* text, size_t size, const std::string& name) {
-  int depth = 0;
-  bool in_string = false, escaped = false;
-  for (size_t i = 0; i < size; ++i) {
-    const char c = text[i];
-    if (in_string) {
-      if (escaped)
-        escaped = false;
-      else if (c == '\\')
-        escaped = true;
-      else if (c == '"')
-        in_string = false;
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > kMaxJsonDepth)
-        throw CookError(name + ": invalid glTF: JSON nested deeper than " +
-                        std::to_string(kMaxJsonDepth) + " levels");
-    } else if (c == ']' || c == '}') {
-      --depth;
-    }
-  }
-}
-
 // tinygltf 2.7, built without its own Draco decoder (tiny_gltf_impl.cpp says why), rejects a
 // primitive whose `indices` accessor has no bufferView, which is exactly how
 // KHR_draco_mesh_compression stores it. The Draco path never reads that accessor (the indices come
@@ -432,11 +419,192 @@ bool draco_indices_patch(const uint8_t* data, size_t size, bool glb, std::vector
   return true;
 }
 
+// ---- files and images tinygltf loads -----------------------------------------------------------
+
+// What tinygltf's file and image callbacks share with the import (their user_data): the folders
+// files may come from, the images to decode and the pixel budget. The first refusal is kept here
+// and reported in the import's own words once tinygltf gives up (or warns and goes on: a missing
+// image is only a warning to it).
+struct LoadContext {
+  std::vector<std::string> roots;  // resolved (realpath) folders
+  std::set<int> base_colour_images;
+  uint64_t max_texture_pixels = 0;
+  uint64_t texture_pixels = 0;
+  std::string refusal;
+  void refuse(const std::string& why) {
+    if (refusal.empty()) refusal = why;
+  }
+};
+
+bool inside_folder(const std::string& path, const std::string& folder) {
+  if (folder == "/") return true;
+  return path.size() > folder.size() && path.compare(0, folder.size(), folder) == 0 &&
+         path[folder.size()] == '/';
+}
+
+std::string resolved(const std::string& path) {
+  char real[PATH_MAX];
+  return ::realpath(path.c_str(), real) ? std::string(real) : std::string();
+}
+
+// tinygltf looks a uri up in the scene's folder, then in the working directory; both candidates
+// pass here. Only files under an allowed folder, links resolved, exist for it.
+bool file_exists(const std::string& path, void* user) {
+  auto* ctx = static_cast<LoadContext*>(user);
+  const std::string real = resolved(path);
+  if (real.empty()) return false;
+  for (const std::string& root : ctx->roots)
+    if (inside_folder(real, root)) return true;
+  ctx->refuse("the file " + quote_path(path) + " (" + quote_path(real) +
+              ") is outside the scene's folder" +
+              (ctx->roots.empty() ? std::string() : " " + quote_path(ctx->roots[0])) +
+              "; buffers and images come from there or below unless " + kUriRootOption +
+              " DIR allows files under DIR");
+  return false;
+}
+
+// No `~` or `$VAR` expansion (tinygltf's default runs wordexp on the uri).
+std::string expand_file_path(const std::string& path, void*) {
+  return path;
+}
+
+// Regular files within the input size limit only (io.h).
+bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                     void* user) {
+  try {
+    *out = read_file(path);
+    return true;
+  } catch (const CookError& e) {
+    static_cast<LoadContext*>(user)->refuse(e.what());
+    if (err) *err = e.what();
+    return false;
+  }
+}
+
+bool write_whole_file(std::string* err, const std::string&, const std::vector<unsigned char>&,
+                      void*) {
+  if (err) *err = "the cooker writes no glTF files";
+  return false;
+}
+
+// Decodes the images base colours use (no other image is ever sampled), each after its header's
+// size is checked against what is left of the pixel budget.
+bool load_image(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
+                int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
+  auto* ctx = static_cast<LoadContext*>(user);
+  if (!ctx->base_colour_images.count(index)) return true;
+  int w = 0, h = 0, comp = 0;
+  if (size > 0 && stbi_info_from_memory(bytes, size, &w, &h, &comp) && w > 0 && h > 0) {
+    const uint64_t pixels = uint64_t(w) * uint64_t(h);
+    if (pixels > ctx->max_texture_pixels - ctx->texture_pixels) {
+      ctx->refuse("image " + std::to_string(index) +
+                  (image->name.empty() ? std::string() : " " + quote(image->name)) + " is " +
+                  std::to_string(w) + "x" + std::to_string(h) + " (" + std::to_string(pixels) +
+                  " pixels); with the base-colour images before it that is over the limit of " +
+                  std::to_string(ctx->max_texture_pixels) + " texture pixels (" +
+                  kMaxTexturePixelsOption + " N raises it)");
+      return false;
+    }
+    ctx->texture_pixels += pixels;
+  }
+  // Undecodable data: tinygltf's loader says so. Its options default to RGBA8/RGBA16.
+  return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size,
+                                 nullptr);
+}
+
+// Reads what the callbacks need from the JSON before tinygltf does: the images base colours use,
+// and every image bufferView's range, checked against its buffer's byteLength (tinygltf hands the
+// decoder a pointer byteOffset bytes into the buffer without checking; the buffer's data is
+// exactly byteLength bytes once tinygltf accepts it). Anything else malformed is left to tinygltf.
+void scan_images(const char* text, size_t size, const std::string& name, LoadContext* ctx) {
+  if (std::string_view(text, size).find("\"images\"") == std::string_view::npos) return;
+  using nlohmann::json;
+  static const std::set<std::string> kept = {"images", "bufferViews", "buffers", "textures",
+                                             "materials"};
+  // Keep only what is read below; drop uris (base64 buffers can be most of the file).
+  const json::parser_callback_t keep = [](int depth, json::parse_event_t event, json& parsed) {
+    if (event != json::parse_event_t::key) return true;
+    if (depth == 1) return parsed.is_string() && kept.count(parsed.get<std::string>()) > 0;
+    return !(depth == 3 && parsed == "uri");
+  };
+  const json doc = json::parse(text, text + size, keep, false);
+  if (doc.is_discarded() || !doc.is_object()) return;
+  auto array = [&](const char* key) -> const json& {
+    static const json empty = json::array();
+    auto it = doc.find(key);
+    return it != doc.end() && it->is_array() ? *it : empty;
+  };
+  // tinygltf's rules: indices and sizes are unsigned JSON integers; an absent byteOffset is 0.
+  auto unsigned_at = [](const json& o, const char* key, uint64_t* v) {
+    if (!o.is_object()) return false;
+    auto it = o.find(key);
+    if (it == o.end() || !it->is_number_unsigned()) return false;
+    *v = it->get<uint64_t>();
+    return true;
+  };
+  const json &images = array("images"), &views = array("bufferViews"), &buffers = array("buffers");
+  for (size_t i = 0; i < images.size(); ++i) {
+    uint64_t v = 0, b = 0, offset = 0, length = 0, buffer_length = 0;
+    if (!unsigned_at(images[i], "bufferView", &v) || v >= views.size()) continue;
+    const json& view = views[size_t(v)];
+    if (!unsigned_at(view, "buffer", &b) || b >= buffers.size() ||
+        !unsigned_at(view, "byteLength", &length) ||
+        !unsigned_at(buffers[size_t(b)], "byteLength", &buffer_length))
+      continue;
+    unsigned_at(view, "byteOffset", &offset);
+    if (!range_inside(offset, length, buffer_length))
+      throw CookError(name + ": image " + std::to_string(i) + ": bufferView " + std::to_string(v) +
+                      " (bytes " + std::to_string(offset) + "+" + std::to_string(length) +
+                      ") extends past the end of buffer " + std::to_string(b) + " (" +
+                      std::to_string(buffer_length) + " bytes)");
+    if (length > uint64_t(std::numeric_limits<int>::max()))
+      throw CookError(name + ": image " + std::to_string(i) + ": bufferView " + std::to_string(v) +
+                      " is larger than 2 GiB, which the image decoder does not take");
+  }
+  const json &materials = array("materials"), &textures = array("textures");
+  for (const json& m : materials) {
+    uint64_t texture = 0, image = 0;
+    if (!m.is_object() || !m.contains("pbrMetallicRoughness")) continue;
+    const json& pbr = m["pbrMetallicRoughness"];
+    if (!pbr.is_object() || !pbr.contains("baseColorTexture")) continue;
+    if (unsigned_at(pbr["baseColorTexture"], "index", &texture) && texture < textures.size() &&
+        unsigned_at(textures[size_t(texture)], "source", &image) &&
+        image <= uint64_t(std::numeric_limits<int>::max()))
+      ctx->base_colour_images.insert(int(image));
+  }
+}
+
+uint64_t saturating_add(uint64_t a, uint64_t b) {
+  return a > std::numeric_limits<uint64_t>::max() - b ? std::numeric_limits<uint64_t>::max()
+                                                      : a + b;
+}
+
+uint64_t saturating_mul(uint64_t a, uint64_t b) {
+  return b != 0 && a > std::numeric_limits<uint64_t>::max() / b
+             ? std::numeric_limits<uint64_t>::max()
+             : a * b;
+}
+
+bool surface_mode(int mode) {
+  return mode < 0 || mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+         mode == TINYGLTF_MODE_TRIANGLE_FAN;
+}
+
+// World coordinates beyond this are refused: float spacing there is 6 cm, and the cross
+// products of the zero-area test and the tracer's epsilons stay finite well within it.
+constexpr float kMaxCoordinate = 1.0e6f;
+
+// Finite and within kMaxCoordinate on every axis.
+bool within_world(const glm::vec3& v) {
+  return finite(v) && std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}) <= kMaxCoordinate;
+}
+
 // ---- the importer ------------------------------------------------------------------------------
 
 class Importer {
  public:
-  Importer(const std::string& path, const tinygltf::Model& model) : path_(path), model_(model) {}
+  Importer(const std::string& path, const tinygltf::Model& model, const ImportLimits& limits)
+      : path_(path), model_(model), limits_(limits) {}
 
   Scene run();
 
@@ -447,10 +615,15 @@ class Importer {
   void add_light_node(int node, const glm::mat4& world);
   int texture_for(int gltf_texture);
   void read_materials();
+  void check_scene_size(const std::vector<int>& roots) const;
+  uint64_t accessor_count(int accessor) const;
+  void count_read(const std::string& label, uint64_t triangles, uint64_t vertices);
   std::string err(const std::string& what) const { return path_ + ": " + what; }
 
   const std::string& path_;
   const tinygltf::Model& model_;
+  const ImportLimits& limits_;
+  uint64_t triangles_read_ = 0, vertices_read_ = 0;
   Scene scene_;
   std::vector<int> visited_;
   std::map<int, int> image_to_texture_;
@@ -498,6 +671,12 @@ void Importer::visit(int node, const glm::mat4& parent, int depth) {
   if (depth > 1024) throw CookError(err("node hierarchy is deeper than 1024 levels"));
   visited_[size_t(node)] = 1;
   const glm::mat4 world = parent * local_matrix(node);
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(world[c][r]))
+        throw CookError(err(node_label(model_, node) +
+                            ": its world transform overflows (its and its parents' scales "
+                            "multiply beyond the float range)"));
   const tinygltf::Node& n = model_.nodes[size_t(node)];
   if (n.mesh >= 0) add_mesh_node(node, world);
   add_light_node(node, world);
@@ -551,7 +730,7 @@ int Importer::texture_for(int gltf_texture) {
   const int bytes = img.bits == 16 ? 2 : (img.bits == 8 ? 1 : 0);
   if (img.width <= 0 || img.height <= 0 || comps <= 0 || bytes == 0 ||
       img.image.size() < size_t(img.width) * size_t(img.height) * size_t(comps) * size_t(bytes)) {
-    scene_.notes.push_back("image " + std::to_string(image) + " " + quoted(img.name) +
+    scene_.notes.push_back("image " + std::to_string(image) + " " + quote(img.name) +
                            " could not be decoded; its material uses baseColorFactor only");
     image_to_texture_[image] = -1;
     return -1;
@@ -600,14 +779,14 @@ void Importer::read_materials() {
     if (!finite(m.albedo) || !finite(m.emissive) ||
         glm::any(glm::lessThan(m.albedo, glm::vec3(0))) ||
         glm::any(glm::lessThan(m.emissive, glm::vec3(0))))
-      throw CookError(err("material " + std::to_string(i) + " " + quoted(gm.name) +
+      throw CookError(err("material " + std::to_string(i) + " " + quote(gm.name) +
                           " has a negative or non-finite colour"));
     // Albedo above 1 would create energy in bounces.
     m.albedo = glm::min(m.albedo, glm::vec3(1.0f));
     if (gm.pbrMetallicRoughness.baseColorTexture.index >= 0) {
       m.albedo_texture = texture_for(gm.pbrMetallicRoughness.baseColorTexture.index);
       if (gm.pbrMetallicRoughness.baseColorTexture.texCoord != 0)
-        scene_.notes.push_back("material " + quoted(gm.name) +
+        scene_.notes.push_back("material " + quote(gm.name) +
                                ": base colour texture uses TEXCOORD_" +
                                std::to_string(gm.pbrMetallicRoughness.baseColorTexture.texCoord) +
                                "; the cooker samples it at TEXCOORD_0");
@@ -669,6 +848,11 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
   for (size_t p = 0; p < mesh.primitives.size(); ++p) {
     const tinygltf::Primitive& prim = mesh.primitives[p];
     const std::string label = node_label(model_, node) + " " + mesh_label(model_, n.mesh, int(p));
+    if (!surface_mode(prim.mode)) {  // before reading: its accessors may be as large as any
+      scene_.notes.push_back(label + ": primitive mode " + std::to_string(prim.mode) +
+                             " (points/lines) is not a surface and was skipped");
+      continue;
+    }
     auto draco = prim.extensions.find(kDraco);
     RawPrimitive raw;
     try {
@@ -711,11 +895,8 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
                             std::to_string(raw.indices[i]) + " is past the vertex count " +
                             std::to_string(nv)));
     std::vector<uint32_t> tris;
-    if (!triangle_list(prim.mode, raw.indices, &tris)) {
-      scene_.notes.push_back(label + ": primitive mode " + std::to_string(prim.mode) +
-                             " (points/lines) is not a surface and was skipped");
-      continue;
-    }
+    triangle_list(prim.mode, raw.indices, &tris);
+    count_read(label, tris.size() / 3, nv);
     if (tris.empty()) {
       scene_.notes.push_back(label + ": no triangles, skipped");
       continue;
@@ -738,8 +919,14 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
       mi.material = default_material_;
     }
     mi.positions.resize(nv);
-    for (size_t i = 0; i < nv; ++i)
-      mi.positions[i] = glm::vec3(world * glm::vec4(raw.positions[i], 1));
+    for (size_t i = 0; i < nv; ++i) {
+      const glm::vec3 q = glm::vec3(world * glm::vec4(raw.positions[i], 1));
+      if (!within_world(q))
+        throw CookError(err(label + ": vertex " + std::to_string(i) + " lies at " + text_of(q) +
+                            " in the world, beyond +-" + std::to_string(int(kMaxCoordinate)) +
+                            " m (too large a scale or translation in the node or its parents?)"));
+      mi.positions[i] = q;
+    }
     // Drop zero-area triangles; the threshold is relative to the primitive's size.
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (const auto& q : mi.positions) {
@@ -757,9 +944,16 @@ void Importer::add_mesh_node(int node, const glm::mat4& world) {
       if (!(glm::length(cr) > min_cross)) continue;
       kept.insert(kept.end(), {a, b, c});
     }
-    if (kept.empty())
+    if (kept.empty()) {
+      // The longest axis of the world transform (a determinant would underflow first).
+      char scale[32];
+      std::snprintf(scale, sizeof scale, "%g",
+                    std::max({glm::length(glm::dvec3(m3[0])), glm::length(glm::dvec3(m3[1])),
+                              glm::length(glm::dvec3(m3[2]))}));
       throw CookError(err(label + " has only zero-area triangles (" +
-                          std::to_string(tris.size() / 3) + " triangles)"));
+                          std::to_string(tris.size() / 3) +
+                          " triangles; the node's world scale is " + scale + ")"));
+    }
     if (kept.size() != tris.size())
       scene_.notes.push_back(label + ": dropped " +
                              std::to_string((tris.size() - kept.size()) / 3) +
@@ -842,8 +1036,12 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
   else if (gl.type == "directional")
     l.type = LightType::kDirectional;
   else
-    throw CookError(err(label + " has unknown type " + quoted(gl.type)));
+    throw CookError(err(label + " has unknown type " + quote(gl.type)));
   l.position = glm::vec3(world * glm::vec4(0, 0, 0, 1));
+  if (!within_world(l.position))
+    throw CookError(err(label + ": the light lies beyond +-" + std::to_string(int(kMaxCoordinate)) +
+                        " m in the world (too large a scale or translation in the node or its "
+                        "parents?)"));
   const glm::vec3 d = glm::mat3(world) * glm::vec3(0, 0, -1);
   if (!(glm::length(d) > 0.0f))
     throw CookError(err(label + ": the node's transform collapses the light direction"));
@@ -875,10 +1073,89 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
   scene_.lights.push_back(l);
 }
 
+uint64_t Importer::accessor_count(int accessor) const {
+  return accessor >= 0 && size_t(accessor) < model_.accessors.size()
+             ? uint64_t(model_.accessors[size_t(accessor)].count)
+             : 0;
+}
+
+// The scene's size before any accessor is read: triangles and vertices of every surface
+// primitive, once per node that instances its mesh. Draco primitives count their POSITION
+// accessor here and their triangles as they are decoded (count_read).
+void Importer::check_scene_size(const std::vector<int>& roots) const {
+  std::vector<uint64_t> uses(model_.meshes.size(), 0);
+  std::vector<uint8_t> seen(model_.nodes.size(), 0);
+  std::vector<int> stack(roots.rbegin(), roots.rend());
+  while (!stack.empty()) {
+    const int node = stack.back();
+    stack.pop_back();
+    // Missing nodes, cycles and second parents: visit() reports them.
+    if (node < 0 || size_t(node) >= model_.nodes.size() || seen[size_t(node)]) continue;
+    seen[size_t(node)] = 1;
+    const tinygltf::Node& n = model_.nodes[size_t(node)];
+    if (n.mesh >= 0 && size_t(n.mesh) < uses.size()) ++uses[size_t(n.mesh)];
+    stack.insert(stack.end(), n.children.rbegin(), n.children.rend());
+  }
+  // Per mesh, all its instances; the scene's sums saturate.
+  std::vector<uint64_t> mesh_triangles(uses.size(), 0), mesh_vertices(uses.size(), 0);
+  uint64_t triangles = 0, vertices = 0;
+  for (size_t m = 0; m < uses.size(); ++m) {
+    if (uses[m] == 0) continue;
+    uint64_t t = 0, v = 0;
+    for (const tinygltf::Primitive& prim : model_.meshes[m].primitives) {
+      if (!surface_mode(prim.mode)) continue;
+      auto position = prim.attributes.find("POSITION");
+      const uint64_t positions =
+          position == prim.attributes.end() ? 0 : accessor_count(position->second);
+      v = saturating_add(v, positions);
+      if (prim.extensions.count(kDraco)) continue;
+      const uint64_t corners = prim.indices >= 0 ? accessor_count(prim.indices) : positions;
+      const bool list = prim.mode < 0 || prim.mode == TINYGLTF_MODE_TRIANGLES;
+      t = saturating_add(t, list ? corners / 3 : (corners >= 3 ? corners - 2 : 0));
+    }
+    mesh_triangles[m] = saturating_mul(t, uses[m]);
+    mesh_vertices[m] = saturating_mul(v, uses[m]);
+    triangles = saturating_add(triangles, mesh_triangles[m]);
+    vertices = saturating_add(vertices, mesh_vertices[m]);
+  }
+  auto refuse = [&](const std::vector<uint64_t>& per_mesh, uint64_t count, const char* what,
+                    uint64_t limit, const char* option) {
+    const size_t most =
+        size_t(std::max_element(per_mesh.begin(), per_mesh.end()) - per_mesh.begin());
+    const std::string& name = model_.meshes[most].name;
+    throw CookError(err("the scene has " + std::to_string(count) + " " + what +
+                        ", each mesh counted once per node that instances it (the most: mesh " +
+                        std::to_string(most) + (name.empty() ? std::string() : " " + quote(name)) +
+                        ", " + std::to_string(per_mesh[most]) + " in " +
+                        std::to_string(uses[most]) + " node(s)), over the limit of " +
+                        std::to_string(limit) + " " + what + " (" + option + " N raises it)"));
+  };
+  if (triangles > limits_.max_triangles)
+    refuse(mesh_triangles, triangles, "triangles", limits_.max_triangles, kMaxTrianglesOption);
+  if (vertices > limits_.max_vertices)
+    refuse(mesh_vertices, vertices, "vertices", limits_.max_vertices, kMaxVerticesOption);
+}
+
+// What the import has read so far, against the same limits: Draco data can decode to more than
+// its accessors declare.
+void Importer::count_read(const std::string& label, uint64_t triangles, uint64_t vertices) {
+  triangles_read_ = saturating_add(triangles_read_, triangles);
+  vertices_read_ = saturating_add(vertices_read_, vertices);
+  auto refuse = [&](uint64_t count, const char* what, uint64_t limit, const char* option) {
+    throw CookError(err("the scene reaches " + std::to_string(count) + " " + what + " at " + label +
+                        ", over the limit of " + std::to_string(limit) + " " + what + " (" +
+                        option + " N raises it)"));
+  };
+  if (triangles_read_ > limits_.max_triangles)
+    refuse(triangles_read_, "triangles", limits_.max_triangles, kMaxTrianglesOption);
+  if (vertices_read_ > limits_.max_vertices)
+    refuse(vertices_read_, "vertices", limits_.max_vertices, kMaxVerticesOption);
+}
+
 Scene Importer::run() {
   for (const std::string& ext : model_.extensionsRequired)
     if (!supported_required().count(ext))
-      throw CookError(err("requires unsupported extension " + quoted(ext)));
+      throw CookError(err("requires unsupported extension " + quote(ext)));
   read_materials();
   visited_.assign(model_.nodes.size(), 0);
   std::vector<int> roots;
@@ -896,7 +1173,16 @@ Scene Importer::run() {
     for (size_t i = 0; i < model_.nodes.size(); ++i)
       if (!is_child[i]) roots.push_back(int(i));
   }
+  check_scene_size(roots);
   for (int r : roots) visit(r, glm::mat4(1.0f), 0);
+  if (model_.scenes.empty()) {
+    // Every node is a root or some node's child; one that no root reaches hangs in a cycle.
+    for (size_t i = 0; i < model_.nodes.size(); ++i)
+      if (!visited_[i])
+        throw CookError(err(node_label(model_, int(i)) +
+                            " is in a cycle of child references, or below one (the file has no "
+                            "scene, so the roots are the nodes that are nobody's child)"));
+  }
   if (scene_.meshes.empty()) throw CookError(err("the scene has no triangles to bake"));
 
   // Names of semi-dynamic nodes are how the scene state addresses them.
@@ -908,7 +1194,7 @@ Scene Importer::run() {
     auto [it, fresh] = seen.emplace(o.name, o.node_index);
     if (!fresh)
       throw CookError(err("semi-dynamic mesh nodes " + std::to_string(it->second) + " and " +
-                          std::to_string(o.node_index) + " share the name " + quoted(o.name)));
+                          std::to_string(o.node_index) + " share the name " + quote(o.name)));
   }
   seen.clear();
   for (const Light& l : scene_.lights) {
@@ -919,7 +1205,7 @@ Scene Importer::run() {
     auto [it, fresh] = seen.emplace(l.name, l.node_index);
     if (!fresh)
       throw CookError(err("semi-dynamic light nodes " + std::to_string(it->second) + " and " +
-                          std::to_string(l.node_index) + " share the name " + quoted(l.name)));
+                          std::to_string(l.node_index) + " share the name " + quote(l.name)));
   }
   scene_.compute_bounds();
   return std::move(scene_);
@@ -927,29 +1213,49 @@ Scene Importer::run() {
 
 }  // namespace
 
-Scene import_gltf(const std::string& path) {
+Scene import_gltf(const std::string& path, const ImportLimits& limits) {
   const std::vector<uint8_t> bytes = read_file(path);  // CookError names the file and the reason
   const size_t slash = path.find_last_of('/');
   return import_gltf_memory(bytes.data(), bytes.size(), path,
-                            slash == std::string::npos ? std::string() : path.substr(0, slash + 1));
+                            slash == std::string::npos ? std::string() : path.substr(0, slash + 1),
+                            limits);
 }
 
 Scene import_gltf_memory(const uint8_t* data, size_t size, const std::string& name,
-                         const std::string& base_dir) {
+                         const std::string& base_dir, const ImportLimits& limits) {
   if (size == 0) throw CookError(name + ": empty file");
   // tinygltf takes 32-bit sizes.
   if (size > std::numeric_limits<uint32_t>::max())
     throw CookError(name + ": larger than 4 GiB, which glTF loaders do not support");
   const bool glb = size >= 4 && std::memcmp(data, "glTF", 4) == 0;
   if (glb) check_glb_container(data, size, name);
-  check_json_depth(reinterpret_cast<const char*>(glb ? data + 20 : data),
-                   glb ? size_t(get_u32(data + 12)) : size, name);
+  const char* json_text = reinterpret_cast<const char*>(glb ? data + 20 : data);
+  const size_t json_size = glb ? size_t(get_u32(data + 12)) : size;
+  // tinygltf turns `extras` and `extensions` into its Value tree recursively.
+  if (json_deeper_than(json_text, json_size, kMaxJsonDepth))
+    throw CookError(name + ": invalid glTF: JSON nested deeper than " +
+                    std::to_string(kMaxJsonDepth) + " levels");
+  LoadContext context;
+  context.max_texture_pixels = limits.max_texture_pixels;
+  // The scene's folder first: messages name it.
+  if (const std::string real = resolved(base_dir.empty() ? "." : base_dir); !real.empty())
+    context.roots.push_back(real);
+  for (const std::string& folder : limits.uri_roots) {
+    const std::string real = resolved(folder);
+    if (real.empty())
+      throw CookError(std::string(kUriRootOption) + " " + quote(folder) + ": no such folder");
+    context.roots.push_back(real);
+  }
+  scan_images(json_text, json_size, name, &context);
   std::vector<uint8_t> patched;
   if (draco_indices_patch(data, size, glb, &patched)) {
     data = patched.data();
     size = patched.size();
   }
   tinygltf::TinyGLTF loader;
+  loader.SetFsCallbacks(
+      {&file_exists, &expand_file_path, &read_whole_file, &write_whole_file, &context});
+  loader.SetImageLoader(&load_image, &context);
   tinygltf::Model model;
   std::string error, warning;
   const bool ok =
@@ -957,12 +1263,13 @@ Scene import_gltf_memory(const uint8_t* data, size_t size, const std::string& na
           : loader.LoadASCIIFromString(&model, &error, &warning,
                                        reinterpret_cast<const char*>(data), uint32_t(size),
                                        base_dir);
+  if (!context.refusal.empty()) throw CookError(name + ": " + context.refusal);
   if (!ok) {
     while (!error.empty() && (error.back() == '\n' || error.back() == '\r')) error.pop_back();
     throw CookError(name + ": invalid glTF" + (glb ? " binary" : "") + ": " +
-                    (error.empty() ? std::string("unknown error") : error));
+                    (error.empty() ? std::string("unknown error") : printable(error, 400)));
   }
-  return Importer(name, model).run();
+  return Importer(name, model, limits).run();
 }
 
 }  // namespace lightpatch::cooker

@@ -1,18 +1,24 @@
 #include "lightpatch/cooker/io.h"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/printable.h"
 
 namespace lightpatch::cooker {
 
@@ -29,6 +35,11 @@ std::string directory_of(const std::string& path) {
   return path.substr(0, slash);
 }
 
+std::string file_name_of(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
 bool host_is_little_endian() {
   const uint32_t one = 1;
   uint8_t first = 0;
@@ -40,68 +51,274 @@ uint32_t byteswap32(uint32_t x) {
   return (x >> 24) | ((x >> 8) & 0xff00u) | ((x << 8) & 0xff0000u) | (x << 24);
 }
 
+const char* kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+std::atomic<uint64_t> g_input_size_limit{kDefaultInputSizeLimit};
+
+// ---- temporaries the signal handler removes ----------------------------------------------------
+
+// Fixed slots, so that the handler touches only lock-free atomics and static memory.
+struct TemporarySlot {
+  std::atomic<int> state{0};  // 0 free, 1 being filled, 2 holds a temporary's path
+  char path[PATH_MAX];
+};
+TemporarySlot g_temporaries[16];
+
+int claim_slot(const std::string& path) {
+  if (path.size() >= sizeof(g_temporaries[0].path)) return -1;  // the next run removes it
+  for (int i = 0; i < int(std::size(g_temporaries)); ++i) {
+    int expected = 0;
+    if (!g_temporaries[i].state.compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(g_temporaries[i].path, path.c_str(), path.size() + 1);
+    g_temporaries[i].state.store(2);
+    return i;
+  }
+  return -1;
+}
+
+void release_slot(int slot) {
+  if (slot >= 0) g_temporaries[slot].state.store(0);
+}
+
+extern "C" void remove_temporaries_and_die(int sig) {
+  for (TemporarySlot& t : g_temporaries)
+    if (t.state.load() == 2) ::unlink(t.path);
+  ::raise(sig);  // SA_RESETHAND restored the default action: die of the same signal
+}
+
+// Removes OUT.lightpatch-tmp-PID-* files of `target` whose process is gone (killed mid-write).
+void remove_stale_temporaries(const std::string& target) {
+  const std::string dir = directory_of(target);
+  const std::string prefix = file_name_of(target) + kTemporaryMarker;
+  DIR* d = ::opendir(dir.c_str());
+  if (d == nullptr) return;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || *end != '-' || pid == long(::getpid())) continue;
+    if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // its writer may still run
+    const std::string path = dir + "/" + name;
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode)) ::unlink(path.c_str());
+  }
+  ::closedir(d);
+}
+
+// ---- command files -----------------------------------------------------------------------------
+
+struct FileId {
+  std::string given, resolved;
+  bool exists = false;
+  dev_t dev = 0;
+  ino_t ino = 0;
+  mode_t mode = 0;
+};
+
+FileId identify(const std::string& path) {
+  FileId id;
+  id.given = path;
+  std::error_code ec;
+  std::filesystem::path p = std::filesystem::weakly_canonical(std::filesystem::absolute(path), ec);
+  id.resolved = ec ? std::filesystem::absolute(path, ec).lexically_normal().string() : p.string();
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    id.exists = true;
+    id.dev = st.st_dev;
+    id.ino = st.st_ino;
+    id.mode = st.st_mode;
+  }
+  return id;
+}
+
+bool same_file(const FileId& a, const FileId& b) {
+  return a.resolved == b.resolved || (a.exists && b.exists && a.dev == b.dev && a.ino == b.ino);
+}
+
 }  // namespace
 
-void write_file_atomic(const std::string& path, const void* data, size_t size) {
-  if (path.empty()) throw CookError("cannot write: empty output path");
+uint64_t input_size_limit() {
+  return g_input_size_limit.load();
+}
+
+void set_input_size_limit(uint64_t bytes) {
+  g_input_size_limit.store(bytes);
+}
+
+std::vector<uint8_t> read_file(const std::string& path) {
+  const std::string name = quote_path(path);
+  // O_NONBLOCK: opening a FIFO must not wait for a writer; fstat then refuses it.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) throw CookError("cannot read " + name + ": " + errno_text());
   struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
-    throw CookError("cannot write '" + path + "': it is a directory");
-  }
-  // The temporary lives in the destination's folder so that rename() is atomic.
-  std::string temp = path + ".tmp.XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) {
-    throw CookError("cannot create a temporary file in '" + directory_of(path) +
-                    "': " + errno_text());
-  }
-  auto fail = [&](const std::string& what) {
+  if (::fstat(fd, &st) != 0) {
     const std::string reason = errno_text();
     ::close(fd);
-    ::unlink(temp.c_str());
-    throw CookError("cannot write '" + path + "' (" + what + "): " + reason);
+    throw CookError("cannot read " + name + ": " + reason);
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw CookError("cannot read " + name + ": it is " + kind_of(st.st_mode) +
+                    ", not a regular file");
+  }
+  const uint64_t limit = input_size_limit();
+  auto over = [&](uint64_t size) {
+    return CookError("cannot read " + name + ": " + std::to_string(size) +
+                     " bytes, over the input size limit of " + std::to_string(limit) + " bytes (" +
+                     std::to_string(limit >> 20) + " MiB; " + kInputSizeOption + " N raises it)");
   };
+  if (uint64_t(st.st_size) > limit) {
+    ::close(fd);
+    throw over(uint64_t(st.st_size));
+  }
+  std::vector<uint8_t> out;
+  out.reserve(size_t(st.st_size));
+  uint8_t buffer[1 << 16];
+  for (;;) {  // to the end, not to st_size: the file may have grown, within the limit
+    const ssize_t n = ::read(fd, buffer, sizeof(buffer));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const std::string reason = errno_text();
+      ::close(fd);
+      throw CookError("cannot read " + name + ": " + reason);
+    }
+    if (n == 0) break;
+    if (out.size() + size_t(n) > limit) {
+      ::close(fd);
+      throw over(out.size() + size_t(n));
+    }
+    out.insert(out.end(), buffer, buffer + n);
+  }
+  ::close(fd);
+  return out;
+}
+
+void check_command_files(const std::vector<std::string>& inputs,
+                         const std::vector<std::string>& outputs) {
+  std::vector<FileId> in, out;
+  for (const std::string& p : inputs)
+    if (!p.empty()) in.push_back(identify(p));
+  for (const std::string& p : outputs)
+    if (!p.empty()) out.push_back(identify(p));
+  for (size_t i = 0; i < out.size(); ++i) {
+    const FileId& o = out[i];
+    if (o.exists && !S_ISREG(o.mode)) {
+      throw CookError("refusing to write " + quote_path(o.given) + ": it exists and is " +
+                      kind_of(o.mode) + ", not a regular file");
+    }
+    for (const FileId& f : in) {
+      if (same_file(o, f)) {
+        throw CookError("refusing to write " + quote_path(o.given) + ": it is the input " +
+                        quote_path(f.given) + " of the same command, which would be lost");
+      }
+    }
+    for (size_t j = 0; j < i; ++j) {
+      if (same_file(o, out[j])) {
+        throw CookError("refusing to write " + quote_path(o.given) + ": it is also the output " +
+                        quote_path(out[j].given) + " of the same command");
+      }
+    }
+  }
+}
+
+// ---- atomic files ------------------------------------------------------------------------------
+
+AtomicFile::AtomicFile(const std::string& path) : path_(path), target_(path) {
+  if (path.empty()) throw CookError("cannot write: empty output path");
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0) {
+    if (S_ISLNK(st.st_mode) && ::stat(path.c_str(), &st) == 0) {
+      // Replace what the link points to, and keep the link.
+      char real[PATH_MAX];
+      if (!S_ISREG(st.st_mode) || ::realpath(path.c_str(), real) == nullptr) {
+        throw CookError("cannot write " + quote_path(path) + ": it links to " +
+                        kind_of(st.st_mode) + ", not a regular file");
+      }
+      target_ = real;
+    } else if (!S_ISLNK(st.st_mode) && !S_ISREG(st.st_mode)) {
+      throw CookError("cannot write " + quote_path(path) + ": it exists and is " +
+                      kind_of(st.st_mode) + ", not a regular file");
+    }
+  }
+  remove_stale_temporaries(target_);
+  // The temporary lives in the destination's folder so that rename() is atomic.
+  temp_ = target_ + kTemporaryMarker + std::to_string(::getpid()) + "-XXXXXX";
+  fd_ = ::mkstemp(temp_.data());
+  if (fd_ < 0) {
+    throw CookError("cannot create a temporary file in " + quote_path(directory_of(target_)) +
+                    " (for " + quote_path(path) + "): " + errno_text());
+  }
+  slot_ = claim_slot(temp_);
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temp_.empty()) ::unlink(temp_.c_str());
+  release_slot(slot_);
+}
+
+void AtomicFile::fail(const std::string& what) {
+  const std::string reason = errno_text();
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  ::unlink(temp_.c_str());
+  temp_.clear();
+  release_slot(slot_);
+  slot_ = -1;
+  throw CookError("cannot write " + quote_path(path_) + " (" + what + "): " + reason);
+}
+
+void AtomicFile::write(const void* data, size_t size) {
+  if (fd_ < 0) throw CookError("cannot write " + quote_path(path_) + ": already finished");
   const auto* bytes = static_cast<const uint8_t*>(data);
   size_t written = 0;
   while (written < size) {
-    const ssize_t n = ::write(fd, bytes + written, size - written);
+    const ssize_t n = ::write(fd_, bytes + written, size - written);
     if (n < 0) {
       if (errno == EINTR) continue;
       fail("write");
     }
     written += static_cast<size_t>(n);
   }
-  if (::fchmod(fd, 0644) != 0) fail("chmod");
-  if (::fsync(fd) != 0) fail("fsync");
-  if (::close(fd) != 0) {
-    const std::string reason = errno_text();
-    ::unlink(temp.c_str());
-    throw CookError("cannot write '" + path + "' (close): " + reason);
-  }
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const std::string reason = errno_text();
-    ::unlink(temp.c_str());
-    throw CookError("cannot write '" + path + "' (rename): " + reason);
-  }
 }
 
-std::vector<uint8_t> read_file(const std::string& path) {
-  FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw CookError("cannot read '" + path + "': " + errno_text());
-  struct stat st {};
-  if (::fstat(::fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
-    std::fclose(f);
-    throw CookError("cannot read '" + path + "': it is a directory");
+void AtomicFile::commit() {
+  if (fd_ < 0) throw CookError("cannot write " + quote_path(path_) + ": already finished");
+  if (::fchmod(fd_, 0644) != 0) fail("chmod");
+  if (::fsync(fd_) != 0) fail("fsync");
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0) fail("close");
+  if (::rename(temp_.c_str(), target_.c_str()) != 0) fail("rename");
+  temp_.clear();
+  release_slot(slot_);
+  slot_ = -1;
+}
+
+void write_file_atomic(const std::string& path, const void* data, size_t size) {
+  AtomicFile file(path);
+  file.write(data, size);
+  file.commit();
+}
+
+void install_temporary_cleanup() {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;
+    struct sigaction sa {};
+    sa.sa_handler = remove_temporaries_and_die;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESETHAND | SA_NODEFER;
+    ::sigaction(sig, &sa, nullptr);
   }
-  std::vector<uint8_t> out;
-  uint8_t buffer[1 << 16];
-  size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0)
-    out.insert(out.end(), buffer, buffer + n);
-  const bool error = std::ferror(f) != 0;
-  std::fclose(f);
-  if (error) throw CookError("cannot read '" + path + "': read error");
-  return out;
 }
 
 void write_pfm(const std::string& path, const FloatImage& image) {

@@ -4,9 +4,15 @@
 
 #include <cstdio>
 
+#include "lightpatch/cooker/printable.h"
+
 namespace lightpatch::cooker {
 
 namespace {
+// What a progress line shows of a stage's label and of a message at most.
+constexpr size_t kStageBytes = 120;
+constexpr size_t kMessageBytes = 2000;
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -20,7 +26,7 @@ Progress::Progress(bool quiet)
 
 void Progress::begin(const std::string& stage, uint64_t total) {
   std::lock_guard<std::mutex> lock(mutex_);
-  stage_ = stage;
+  stage_ = printable(stage, kStageBytes);  // stages name lights and objects: cut, escaped
   total_ = total;
   done_.store(0);
   last_percent_ = -1;
@@ -50,7 +56,7 @@ void Progress::message(const std::string& text) {
   if (quiet_) return;
   std::lock_guard<std::mutex> lock(mutex_);
   if (tty_) std::fprintf(stderr, "\r\033[K");
-  std::fprintf(stderr, "%s\n", text.c_str());
+  std::fprintf(stderr, "%s\n", printable(text, kMessageBytes).c_str());
 }
 
 // Caller holds mutex_.

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <string>
 
+#include "json_depth.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/printable.h"
 
 namespace lightpatch::cooker {
 
@@ -18,11 +20,16 @@ std::string type_name(const json& j) {
   return j.type_name();
 }
 
+// A value as messages show it: its JSON, cut (a value can be as long as the file).
+std::string shown(const json& j) {
+  return printable(j.dump(-1, ' ', false, json::error_handler_t::replace));
+}
+
 float finite_non_negative(const json& j, const std::string& where) {
   if (!j.is_number()) throw CookError(where + " must be a number, got " + type_name(j));
   const double v = j.get<double>();
   if (!std::isfinite(v) || v < 0.0 || v > 3.0e38) {
-    throw CookError(where + " must be a finite non-negative number, got " + j.dump());
+    throw CookError(where + " must be a finite non-negative number, got " + shown(j));
   }
   return static_cast<float>(v);
 }
@@ -32,14 +39,14 @@ LightOverride parse_light(const json& j, const std::string& where) {
   LightOverride o;
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& key = it.key();
-    const std::string at = where + "." + key;
+    const std::string at = where + "." + printable(key);
     if (key == "on") {
-      if (!it->is_boolean()) throw CookError(at + " must be true or false, got " + it->dump());
+      if (!it->is_boolean()) throw CookError(at + " must be true or false, got " + shown(*it));
       o.has_on = true;
       o.on = it->get<bool>();
     } else if (key == "color") {
       if (!it->is_array() || it->size() != 3) {
-        throw CookError(at + " must be an array of 3 numbers, got " + it->dump());
+        throw CookError(at + " must be an array of 3 numbers, got " + shown(*it));
       }
       for (int c = 0; c < 3; ++c) {
         o.color[c] = finite_non_negative((*it)[c], at + "[" + std::to_string(c) + "]");
@@ -58,11 +65,16 @@ LightOverride parse_light(const json& j, const std::string& where) {
 }  // namespace
 
 StateSpec parse_state_json(const std::string& text, const std::string& what) {
+  if (json_deeper_than(text.data(), text.size(), kMaxJsonDepth)) {
+    throw CookError(what + ": invalid state: JSON nested deeper than " +
+                    std::to_string(kMaxJsonDepth) + " levels");
+  }
   json root;
   try {
     root = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw CookError(what + ": invalid JSON: " + e.what());
+  } catch (const json::exception& e) {
+    // parse_error, and out_of_range for a number beyond a double (1e400).
+    throw CookError(what + ": invalid JSON: " + printable(e.what(), 200));
   }
   if (!root.is_object())
     throw CookError(what + ": a state must be a JSON object, got " + type_name(root));
@@ -73,26 +85,26 @@ StateSpec parse_state_json(const std::string& text, const std::string& what) {
       if (!it->is_object())
         throw CookError(what + ": \"lights\" must be an object, got " + type_name(*it));
       for (auto l = it->begin(); l != it->end(); ++l) {
-        spec.lights[l.key()] = parse_light(*l, what + ": lights." + l.key());
+        spec.lights[l.key()] = parse_light(*l, what + ": lights." + printable(l.key()));
       }
     } else if (key == "objects") {
       if (!it->is_object())
         throw CookError(what + ": \"objects\" must be an object, got " + type_name(*it));
       for (auto o = it->begin(); o != it->end(); ++o) {
-        const std::string at = what + ": objects." + o.key();
+        const std::string at = what + ": objects." + printable(o.key());
         if (!o->is_object()) throw CookError(at + " must be an object, got " + type_name(*o));
         bool visible = true;
         for (auto f = o->begin(); f != o->end(); ++f) {
           if (f.key() != "visible")
-            throw CookError(at + "." + f.key() + ": unknown key (expected visible)");
+            throw CookError(at + "." + printable(f.key()) + ": unknown key (expected visible)");
           if (!f->is_boolean())
-            throw CookError(at + ".visible must be true or false, got " + f->dump());
+            throw CookError(at + ".visible must be true or false, got " + shown(*f));
           visible = f->get<bool>();
         }
         spec.objects[o.key()] = visible;
       }
     } else {
-      throw CookError(what + ": unknown key \"" + key + "\" (expected lights, objects)");
+      throw CookError(what + ": unknown key \"" + printable(key) + "\" (expected lights, objects)");
     }
   }
   return spec;
@@ -105,7 +117,10 @@ StateSpec load_state_file(const std::string& path) {
 
 std::vector<StateSpec> load_states_jsonl(const std::string& path) {
   const std::vector<uint8_t> bytes = read_file(path);
-  const std::string text(bytes.begin(), bytes.end());
+  return parse_states_jsonl(std::string(bytes.begin(), bytes.end()), path);
+}
+
+std::vector<StateSpec> parse_states_jsonl(const std::string& text, const std::string& path) {
   std::vector<StateSpec> out;
   size_t start = 0;
   int line = 0;

@@ -37,6 +37,7 @@
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/scene_state.h"
+#include "limit_options.h"
 #include "plot_png.h"
 #include "verbs.h"
 
@@ -219,7 +220,9 @@ Metrics compare(const std::vector<float>& map, const FloatImage& ref, const Refe
 std::vector<float> recompose_authored(const std::vector<uint8_t>& pack) {
   PackView view;
   Error error;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+  // The CPU reference takes float maps: only the format is checked, not the GLES runtime's limits.
+  if (PackView::open(pack.data(), pack.size(), RecomposeLimits::format_only(), &view, &error) !=
+      Status::kOk) {
     throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
   }
   SceneState state;
@@ -495,7 +498,8 @@ struct RuntimeRow {
 uint64_t atlas_bytes_of(const std::vector<uint8_t>& pack) {
   PackView view;
   Error error;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk) {
+  if (PackView::open(pack.data(), pack.size(), RecomposeLimits::format_only(), &view, &error) !=
+      Status::kOk) {
     throw CookError(std::string("accuracy: the cooked pack does not load: ") + error.message);
   }
   uint64_t bytes = 0;
@@ -511,7 +515,8 @@ double cpu_rebuild_ms(const std::vector<uint8_t>& pack, int reps) {
   Error error;
   SceneState state;
   CpuRecomposer recomposer;
-  if (PackView::open(pack.data(), pack.size(), &view, &error) != Status::kOk ||
+  if (PackView::open(pack.data(), pack.size(), RecomposeLimits::format_only(), &view, &error) !=
+          Status::kOk ||
       state.init(view, &error) != Status::kOk || recomposer.init(view, &error) != Status::kOk) {
     throw CookError(std::string("accuracy: recompose: ") + error.message);
   }
@@ -559,6 +564,7 @@ int verb_accuracy(Args& args) {
   o.threads = args.int_option("--threads", 0, 1, 1024);
   o.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.quiet = args.flag("--quiet", "-q");
+  const ImportLimits import_limits = parse_import_limits(args);
   o.scene_path = args.positional("SCENE");
   args.finish();
   if (o.csv_path.empty()) throw ArgsError("missing --csv OUT.csv");
@@ -585,6 +591,7 @@ int verb_accuracy(Args& args) {
   }
   if (o.reference_noise < 0.0) o.reference_noise = o.quick ? 0.0 : kReferenceNoisePercent;
   if (o.lightmap_size == 0) o.lightmap_size = o.quick ? kQuickLightmapSize : kDefaultLightmapSize;
+  check_command_files({o.scene_path}, {o.csv_path, o.plot_path, o.runtime_csv_path});
   probe_output_folder(o.csv_path);
   probe_output_folder(o.plot_path);
   if (!o.runtime_csv_path.empty()) probe_output_folder(o.runtime_csv_path);
@@ -595,7 +602,7 @@ int verb_accuracy(Args& args) {
   Report scratch;
 
   progress.begin("import", 1);
-  const Scene scene = import_gltf(o.scene_path);
+  const Scene scene = import_gltf(o.scene_path, import_limits);
   progress.end();
   progress.begin("trace setup", 1);
   const std::unique_ptr<Tracer> tracer = make_embree_tracer(scene);

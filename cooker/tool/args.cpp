@@ -48,6 +48,20 @@ int Args::int_option(const std::string& name, int fallback, int min_value, int m
   return static_cast<int>(x);
 }
 
+uint64_t Args::count_option(const std::string& name, uint64_t fallback, uint64_t min_value,
+                            uint64_t max_value) {
+  std::string v;
+  if (!option(name, &v)) return fallback;
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long x = std::strtoull(v.c_str(), &end, 10);
+  if (v.empty() || v[0] == '-' || *end != '\0' || errno != 0 || x < min_value || x > max_value) {
+    throw ArgsError(name + " takes an integer in [" + std::to_string(min_value) + ", " +
+                    std::to_string(max_value) + "], got '" + v + "'");
+  }
+  return x;
+}
+
 float Args::float_option(const std::string& name, float fallback, float min_value,
                          float max_value) {
   std::string v;

@@ -2,6 +2,7 @@
 // name the option. Throws ArgsError (caught in main, exit code 2).
 #pragma once
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -22,6 +23,8 @@ struct Args {
   // --name / -n flag.
   bool flag(const std::string& name, const std::string& short_name = "");
   int int_option(const std::string& name, int fallback, int min_value, int max_value);
+  uint64_t count_option(const std::string& name, uint64_t fallback, uint64_t min_value,
+                        uint64_t max_value);
   float float_option(const std::string& name, float fallback, float min_value, float max_value);
   // Next positional argument; throws with `what` when absent.
   std::string positional(const std::string& what);

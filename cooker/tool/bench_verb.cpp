@@ -18,6 +18,7 @@
 #include "lightpatch/platform/file_mapping.h"
 #include "lightpatch/platform/gl.h"
 #include "lightpatch/runtime.h"
+#include "limit_options.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -95,6 +96,7 @@ uint32_t frames_until_idle(Runtime& rt, uint64_t budget, BudgetRun* run, double*
 }  // namespace
 
 int verb_bench(Args& args) {
+  const RecomposeLimits limits = parse_recompose_limits(args);  // options before the positional
   const std::string path = args.positional("PACK");
   const bool json = args.flag("--json");
   args.finish();
@@ -104,8 +106,8 @@ int verb_bench(Args& args) {
   if (!mapping.open(path.c_str(), message, sizeof message)) throw CookError(message);
   PackView pack;
   Error error;
-  if (PackView::open(mapping.data(), mapping.size(), &pack, &error) != Status::kOk) {
-    throw CookError(path + ": " + status_name(error.status) + ": " + error.message);
+  if (PackView::open(mapping.data(), mapping.size(), limits, &pack, &error) != Status::kOk) {
+    throw CookError(path + ": " + pack_error_text(error));
   }
   platform::EglContext context;
   if (!context.create_headless(message, sizeof message)) {

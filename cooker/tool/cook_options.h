@@ -6,6 +6,7 @@
 
 #include "args.h"
 #include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/layout.h"
 
 namespace lightpatch::tool {
@@ -16,6 +17,7 @@ struct CookOptions {
   std::string report_path;
   cooker::LayoutOptions layout;
   cooker::BakeOptions bake;
+  cooker::ImportLimits import;
   bool quiet = false;
 };
 

@@ -25,6 +25,7 @@
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
+#include "limit_options.h"
 #include "preview_image.h"
 #include "verbs.h"
 
@@ -91,6 +92,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.quiet = args.flag("--quiet", "-q");
   o.layout.align = layout_align(o.bake);
   o.layout.align_required = o.bake.indirect_scale > 0;
+  o.import = parse_import_limits(args);
   return o;
 }
 
@@ -168,14 +170,17 @@ int verb_cook(Args& args) {
         "gather");
   }
   const auto t0 = std::chrono::steady_clock::now();
+  check_command_files({o.scene_path}, {o.output, o.report_path, gltf_path});
   probe_output_folder(o.output);
   if (!o.report_path.empty()) probe_output_folder(o.report_path);
   if (!gltf_path.empty()) probe_output_folder(gltf_path);
   Progress progress(o.quiet);
   Report report;
-  const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report);
+  const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report, o.import);
   BakedMaps maps;
   const std::vector<uint8_t> pack = cook_pack(p, o.bake, progress, report, &maps);
+  if (const std::string w = check_cooked_pack(pack); !w.empty())
+    std::fprintf(stderr, "lightpatch cook: warning: %s\n", w.c_str());
   progress.begin("write", 1);
   write_file_atomic(o.output, pack.data(), pack.size());
   if (!gltf_path.empty()) {
@@ -232,6 +237,8 @@ int verb_bake_state(Args& args) {
     if (std_error_out == o.output) throw ArgsError("--std-error names the map itself");
   }
   const auto t0 = std::chrono::steady_clock::now();
+  check_command_files({o.scene_path, state_path},
+                      {o.output, o.report_path, picture.png, reference ? std_error_out : ""});
   const StateSpec state = state_path.empty() ? StateSpec{} : load_state_file(state_path);
   probe_output_folder(o.output);
   if (!picture.png.empty()) probe_output_folder(picture.png);
@@ -239,7 +246,7 @@ int verb_bake_state(Args& args) {
   if (reference) probe_output_folder(std_error_out);
   Progress progress(o.quiet);
   Report report;
-  const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report);
+  const PreparedScene p = prepare_scene(o.scene_path, o.layout, progress, report, o.import);
   FloatImage map, std_error;
   if (reference) {
     ref.seed = o.bake.seed;

@@ -67,6 +67,7 @@ int verb_plan(Args& args) {
   s.scene_path = o.scene_path;
   s.layout = o.layout;
   s.bake = o.bake;
+  s.import = o.import;
   const PlannedJobs planned = plan_job_dir(o.output, s, progress, report);
   const std::vector<CookJob>& jobs = planned.jobs;
   size_t done = 0;

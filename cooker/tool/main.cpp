@@ -6,6 +6,8 @@
 
 #include "args.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/io.h"
+#include "limit_options.h"
 #include "verbs.h"
 
 namespace {
@@ -266,6 +268,8 @@ void usage(FILE* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Interrupted or killed politely, the tool leaves no temporary file behind (io.h).
+  lightpatch::cooker::install_temporary_cleanup();
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     usage(argc < 2 ? stderr : stdout);
     return argc < 2 ? 2 : 0;
@@ -282,10 +286,25 @@ int main(int argc, char** argv) {
             v.run == lightpatch::tool::verb_plan) {
           std::printf("%s", kCookOptionsHelp);
         }
+        std::printf("\nlimits (README, \"Limits\"):\n");
+        // A job folder's verbs import with the limits plan recorded and read no pack.
+        const bool imports =
+            v.run == lightpatch::tool::verb_cook || v.run == lightpatch::tool::verb_bake_state ||
+            v.run == lightpatch::tool::verb_accuracy || v.run == lightpatch::tool::verb_plan;
+        const bool job_folder = v.run == lightpatch::tool::verb_cook_job ||
+                                v.run == lightpatch::tool::verb_jobs ||
+                                v.run == lightpatch::tool::verb_assemble;
+        if (imports) {
+          std::printf("%s", lightpatch::tool::kImportLimitsHelp);
+        } else if (!job_folder) {
+          std::printf("%s", lightpatch::tool::kRecomposeLimitsHelp);
+        }
+        std::printf("%s", lightpatch::tool::kInputSizeHelp);
         return 0;
       }
     }
     try {
+      lightpatch::tool::apply_input_size_option(args);
       return v.run(args);
     } catch (const lightpatch::tool::ArgsError& e) {
       std::fprintf(stderr, "lightpatch %s: %s\nusage: lightpatch %s\n", v.name, e.what(), v.usage);

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -11,11 +12,13 @@
 #include "gles_backend.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/printable.h"
 #include "lightpatch/cooker/state_spec.h"
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/platform/file_mapping.h"
 #include "lightpatch/scene_state.h"
+#include "limit_options.h"
 #include "preview_image.h"
 #include "state_apply.h"
 #include "verbs.h"
@@ -30,12 +33,12 @@ using cooker::CookError;
 struct OpenPack {
   platform::FileMapping mapping;
   PackView view;
-  explicit OpenPack(const std::string& path) {
+  OpenPack(const std::string& path, const RecomposeLimits& limits) {
     char message[256] = {};
     if (!mapping.open(path.c_str(), message, sizeof(message))) throw CookError(message);
     Error error;
-    if (PackView::open(mapping.data(), mapping.size(), &view, &error) != Status::kOk) {
-      throw CookError(path + ": " + status_name(error.status) + ": " + error.message);
+    if (open_pack(mapping.data(), mapping.size(), limits, &view, &error) != Status::kOk) {
+      throw CookError(path + ": " + pack_error_text(error));
     }
   }
 };
@@ -74,6 +77,10 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["version"] = p.header().version;
   j["bytes"] = p.size();
   j["lightmap"] = {{"width", p.lightmap_width()}, {"height", p.lightmap_height()}};
+  // 0 x 0 and scale 0 without one (pack_format.h, "Two target maps").
+  j["indirect_map"] = {{"width", p.indirect_width()},
+                       {"height", p.indirect_height()},
+                       {"scale", p.indirect_scale()}};
   nlohmann::ordered_json lights = nlohmann::ordered_json::array();
   for (uint32_t i = 0; i < p.light_count(); ++i) {
     const pack::LightRecord& l = p.light(i);
@@ -86,7 +93,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["lights"] = lights;
   j["objects"] = objects;
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
-                                         square = 0;
+                                         square = 0, indirect = 0;
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
     const pack::PatchRecord& r = p.patch(i);
     by_kind[p.group(r.group).kind]++;
@@ -94,6 +101,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
     negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
     one_channel += r.channel_count == 1 ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
+    indirect += r.target == pack::kTargetIndirectMap ? 1 : 0;
   }
   j["groups"] = p.group_count();
   j["patches"] = {{"total", p.patch_count()},
@@ -106,6 +114,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                   {"one_channel", one_channel},
                   {"three_channel", p.patch_count() - one_channel},
                   {"square_encoded", square},
+                  {"indirect_map", indirect},
                   {"channel_texels", texels}};
   nlohmann::ordered_json atlases = nlohmann::ordered_json::array();
   uint64_t atlas_bytes = 0;
@@ -194,26 +203,35 @@ cooker::FloatImage recomposed(const PackView& view, const std::vector<cooker::St
 
 int verb_info(Args& args) {
   const bool json = args.flag("--json");
+  const RecomposeLimits limits = parse_recompose_limits(args);
   const std::string path = args.positional("PACK");
   args.finish();
-  OpenPack pack(path);
+  OpenPack pack(path, limits);
   const nlohmann::ordered_json j = describe(pack.view, path);
   if (json) {
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
   const auto& pt = j["patches"];
-  std::printf("%s: lightpatch pack v%u, %llu bytes\n", path.c_str(), pack.view.header().version,
-              static_cast<unsigned long long>(pack.view.size()));
+  std::printf("%s: lightpatch pack v%u, %llu bytes\n", cooker::printable(path, SIZE_MAX).c_str(),
+              pack.view.header().version, static_cast<unsigned long long>(pack.view.size()));
   std::printf("light map      %ux%u\n", pack.view.lightmap_width(), pack.view.lightmap_height());
+  if (pack.view.has_indirect_map()) {
+    std::printf(
+        "indirect map   %ux%u (1/%u of the light map per axis), %llu patches draw into it\n",
+        pack.view.indirect_width(), pack.view.indirect_height(), pack.view.indirect_scale(),
+        pt["indirect_map"].get<unsigned long long>());
+  }
   std::printf("lights         %u\n", pack.view.light_count());
   for (const auto& l : j["lights"]) {
-    std::printf("  %s  colour (%g, %g, %g)  intensity %g\n", l["name"].get<std::string>().c_str(),
+    std::printf("  %s  colour (%g, %g, %g)  intensity %g\n",
+                cooker::printable(l["name"].get<std::string>(), SIZE_MAX).c_str(),
                 l["color"][0].get<double>(), l["color"][1].get<double>(),
                 l["color"][2].get<double>(), l["intensity"].get<double>());
   }
   std::printf("objects        %u\n", pack.view.object_count());
-  for (const auto& o : j["objects"]) std::printf("  %s\n", o.get<std::string>().c_str());
+  for (const auto& o : j["objects"])
+    std::printf("  %s\n", cooker::printable(o.get<std::string>(), SIZE_MAX).c_str());
   std::printf("groups         %u\n", pack.view.group_count());
   std::printf(
       "patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
@@ -240,6 +258,7 @@ int verb_info(Args& args) {
 }
 
 int verb_verify(Args& args) {
+  const RecomposeLimits limits = parse_recompose_limits(args);
   const std::string path = args.positional("PACK");
   args.finish();
   platform::FileMapping mapping;
@@ -250,9 +269,8 @@ int verb_verify(Args& args) {
   }
   PackView view;
   Error error;
-  if (PackView::open(mapping.data(), mapping.size(), &view, &error) != Status::kOk) {
-    std::fprintf(stderr, "%s: INVALID: %s: %s\n", path.c_str(), status_name(error.status),
-                 error.message);
+  if (open_pack(mapping.data(), mapping.size(), limits, &view, &error) != Status::kOk) {
+    std::fprintf(stderr, "%s: INVALID: %s\n", path.c_str(), pack_error_text(error).c_str());
     return 1;
   }
   std::printf("%s: OK (%llu bytes, %u lights, %u objects, %u patches, %u atlases)\n", path.c_str(),
@@ -267,6 +285,7 @@ int verb_recompose(Args& args) {
   args.option("--states", &states_path);
   if (!args.option("--backend", &backend)) backend = "cpu";
   if (!args.option("-o", &output)) args.option("--output", &output);
+  const RecomposeLimits limits = parse_recompose_limits(args);
   const std::string path = args.positional("PACK");
   args.finish();
   if (output.empty()) throw ArgsError("-o MAP.pfm is required");
@@ -274,11 +293,12 @@ int verb_recompose(Args& args) {
     throw ArgsError("give --state or --states, not both");
   if (backend != "cpu" && backend != "gles")
     throw ArgsError("--backend takes cpu or gles, got '" + backend + "'");
+  cooker::check_command_files({path, state_path, states_path}, {output});
 
   std::vector<cooker::StateSpec> states;
   if (!state_path.empty()) states.push_back(cooker::load_state_file(state_path));
   if (!states_path.empty()) states = cooker::load_states_jsonl(states_path);
-  OpenPack pack(path);
+  OpenPack pack(path, limits);
   const PackView& view = pack.view;
 
   std::vector<TargetTexels> costs;
@@ -309,12 +329,14 @@ int verb_preview(Args& args) {
   args.option("--state", &state_path);
   PreviewOptions o = parse_preview_options(args, nullptr);
   if (!args.option("-o", &o.png)) args.option("--output", &o.png);
+  const RecomposeLimits limits = parse_recompose_limits(args);
   const std::string path = args.positional("PACK");
   args.finish();
   if (o.png.empty()) throw ArgsError("-o OUT.png is required");
+  cooker::check_command_files({path, state_path}, {o.png});
   std::vector<cooker::StateSpec> states;
   if (!state_path.empty()) states.push_back(cooker::load_state_file(state_path));
-  OpenPack pack(path);
+  OpenPack pack(path, limits);
   const cooker::FloatImage map = o.view == PreviewView::kAtlases
                                      ? cooker::FloatImage(1, 1, 3)
                                      : recomposed(pack.view, states, false);

@@ -18,20 +18,6 @@
 namespace lightpatch::test {
 namespace {
 
-// Options that keep every cook small and fast (also under ASan).
-const std::vector<std::string> kFast = {"--quality", "draft", "--lightmap-size", "32", "--quiet"};
-
-std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
-
-ToolRun expect_success(const std::vector<std::string>& args) {
-  const ToolRun r = run_tool(args);
-  EXPECT_EQ(r.code, 0) << describe(args, r);
-  return r;
-}
-
 // Runs a command that must fail: non-zero exit, a message on stderr containing `word`, `output`
 // (if not empty) byte for byte as before, and the folder holding exactly what it held before.
 void expect_failure(const ScratchDir& dir, const std::vector<std::string>& args,

@@ -9,6 +9,25 @@
 #include <iterator>
 #include <stdexcept>
 
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wall"
+#pragma clang diagnostic ignored "-Wextra"
+#elif defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wall"
+#pragma GCC diagnostic ignored "-Wextra"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#endif
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STB_IMAGE_WRITE_STATIC
+#include <stb/stb_image_write.h>
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#elif defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+
 namespace lightpatch::test {
 
 namespace fs = std::filesystem;
@@ -232,6 +251,18 @@ scenegen::SceneBuilder small_room_with_uv1() {
   grid_uv1(pillar, &next);
   grid_uv1(crate, &next);
   return room_of(floor, pillar, crate, 0.0f);
+}
+
+std::vector<std::uint8_t> png(int w, int h, const std::vector<std::uint8_t>& rgb) {
+  std::vector<std::uint8_t> out;
+  stbi_write_png_to_func(
+      [](void* ctx, void* data, int size) {
+        auto* v = static_cast<std::vector<std::uint8_t>*>(ctx);
+        v->insert(v->end(), static_cast<std::uint8_t*>(data),
+                  static_cast<std::uint8_t*>(data) + size);
+      },
+      &out, w, h, 3, rgb.data(), w * 3);
+  return out;
 }
 
 }  // namespace lightpatch::test

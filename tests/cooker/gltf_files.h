@@ -58,6 +58,8 @@ float get_float(const GltfParts& parts, int accessor, std::size_t element, int c
 void set_index(GltfParts& parts, int accessor, std::size_t element, std::uint32_t value);
 
 std::string base64(const std::vector<std::uint8_t>& data);
+// An 8-bit RGB PNG of w x h pixels, `rgb` row by row from the top.
+std::vector<std::uint8_t> png(int w, int h, const std::vector<std::uint8_t>& rgb);
 
 // A small scene that exercises everything the cooks need (a few hundred triangles):
 // a 4 m x 4 m floor ("floor"), a static box ("pillar"), a semi-dynamic box ("crate") on the

@@ -15,25 +15,6 @@
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/unwrap.h"
 
-#if defined(__clang__)
-#pragma clang diagnostic push
-#pragma clang diagnostic ignored "-Wall"
-#pragma clang diagnostic ignored "-Wextra"
-#elif defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wall"
-#pragma GCC diagnostic ignored "-Wextra"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#endif
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
-#include <stb/stb_image_write.h>
-#if defined(__clang__)
-#pragma clang diagnostic pop
-#elif defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
-
 namespace lightpatch::test {
 namespace {
 
@@ -206,18 +187,6 @@ TEST(ImportGltf, MaterialsGiveAlbedoAndEmission) {
   expect_near(material_of("strip").emissive, {0.5f, 0.5f, 0.5f}, 1e-6f, "emissiveFactor alone");
   expect_near(material_of("plain").albedo, {1, 1, 1}, 0.0f, "glTF default material");
   EXPECT_EQ(material_of("wall").albedo_texture, -1);
-}
-
-std::vector<std::uint8_t> png(int w, int h, const std::vector<std::uint8_t>& rgb) {
-  std::vector<std::uint8_t> out;
-  stbi_write_png_to_func(
-      [](void* ctx, void* data, int size) {
-        auto* v = static_cast<std::vector<std::uint8_t>*>(ctx);
-        v->insert(v->end(), static_cast<std::uint8_t*>(data),
-                  static_cast<std::uint8_t*>(data) + size);
-      },
-      &out, w, h, 3, rgb.data(), w * 3);
-  return out;
 }
 
 float srgb(float c) {

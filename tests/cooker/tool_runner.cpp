@@ -1,5 +1,6 @@
 #include "tool_runner.h"
 
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -67,6 +68,19 @@ std::string describe(const std::vector<std::string>& args, const ToolRun& r) {
   std::string s = "lightpatch";
   for (const auto& a : args) s += " " + a;
   return s + "\nexit " + std::to_string(r.code) + "\nstdout: " + r.out + "\nstderr: " + r.err;
+}
+
+const std::vector<std::string> kFast = {"--quality", "draft", "--lightmap-size", "32", "--quiet"};
+
+std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+ToolRun expect_success(const std::vector<std::string>& args) {
+  const ToolRun r = run_tool(args);
+  EXPECT_EQ(r.code, 0) << describe(args, r);
+  return r;
 }
 
 }  // namespace lightpatch::test

@@ -16,4 +16,11 @@ ToolRun run_tool(const std::vector<std::string>& args);
 // The command line and what it printed, for failure messages.
 std::string describe(const std::vector<std::string>& args, const ToolRun& r);
 
+// Cook options that keep every cook small and fast (also under ASan).
+extern const std::vector<std::string> kFast;
+// `a` followed by `b`.
+std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b);
+// Runs `lightpatch args...` and expects exit status 0 (a gtest failure otherwise).
+ToolRun expect_success(const std::vector<std::string>& args);
+
 }  // namespace lightpatch::test

@@ -13,9 +13,11 @@ namespace lightpatch::testing {
 
 using namespace cooker;
 
-void cook_draft(CookedPack& c, float texels_per_unit) {
+void cook_draft(CookedPack& c, float texels_per_unit, int indirect_scale) {
   LayoutOptions lo;
   lo.texels_per_unit = texels_per_unit;
+  lo.align = indirect_scale;
+  lo.align_required = indirect_scale > 1;
   c.layout = build_layout(c.scene, lo);
   c.tracer = make_embree_tracer(c.scene);
   c.texels = build_texels(c.scene, c.layout, c.tracer.get());
@@ -23,6 +25,7 @@ void cook_draft(CookedPack& c, float texels_per_unit) {
   Report report;
   BakeOptions options;
   options.quality = Quality::kDraft;
+  if (indirect_scale > 1) options.indirect_scale = indirect_scale;  // else the preset's level
   BakedMaps maps = bake_maps(c.scene, c.layout, c.texels, *c.tracer, options, progress, report);
   finalize_maps(maps, c.scene, c.layout, c.texels);
   c.bytes = build_pack(c.scene, c.layout, maps, PackOptions{}, report);

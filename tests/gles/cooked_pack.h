@@ -27,8 +27,10 @@ struct CookedPack {
 };
 
 // Cooks c.scene (finished) at `texels_per_unit`, draft quality, indirect light on; the pack is
-// opened into c.pack (gtest assertion on failure).
-void cook_draft(CookedPack& c, float texels_per_unit);
+// opened into c.pack (gtest assertion on failure). `indirect_scale` 2, 4 or 8: the layout on
+// blocks of that many texels and bounce light stored in an indirect map where the cooker finds it
+// smaller (`cook --indirect-scale`); 1: none.
+void cook_draft(CookedPack& c, float texels_per_unit, int indirect_scale = 1);
 
 // A headless GLES context with a runtime and the CPU reference recomposer on one pack.
 struct Recomposers {

@@ -2,7 +2,8 @@
 // coloured semi-dynamic lights, three semi-dynamic boxes): after the first build, after each of a
 // run of single changes through the incremental path, and after 300 incremental states (random
 // toggles, colours, intensities, lights off and on). Bars: relative RMSE <= 0.1 % and the median
-// of got / want within +-0.05 % (tests/runtime/map_metrics.h).
+// of got / want within +-0.05 % (tests/runtime/map_metrics.h). The same room cooked with an
+// indirect map (bounce light at 1/4 resolution) is held to the same bars on L + magnified I.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -56,19 +57,24 @@ class GlesAccuracy : public ::testing::Test {
     cooked_ = new testing::CookedPack;
     room_scene(*cooked_);
     testing::cook_draft(*cooked_, 12.0f);
+    // The same room with its bounce light at a quarter of the resolution (an indirect map).
+    cooked_indirect_ = new testing::CookedPack;
+    room_scene(*cooked_indirect_);
+    testing::cook_draft(*cooked_indirect_, 12.0f, 4);
   }
   static void TearDownTestSuite() {
     delete cooked_;
-    cooked_ = nullptr;
+    delete cooked_indirect_;
+    cooked_ = cooked_indirect_ = nullptr;
   }
 
   // Runs the sequence on a runtime opened with `limits`, checking every measured state against
   // the bars (relative RMSE, |median - 1|); prints the first build, the worst of the single
   // changes and the last state.
   void run(const RuntimeLimits& limits, const char* what, double max_rmse = kMaxRelativeRmse,
-           double max_bias = kMaxMedianBias) {
+           double max_bias = kMaxMedianBias, const testing::CookedPack* cooked = cooked_) {
     ASSERT_FALSE(HasFatalFailure());
-    const PackView& pack = cooked_->pack;
+    const PackView& pack = cooked->pack;
     ASSERT_GE(pack.light_count(), 3u);
     ASSERT_GE(pack.object_count(), 3u);
     testing::Recomposers r;
@@ -148,8 +154,10 @@ class GlesAccuracy : public ::testing::Test {
   }
 
   static testing::CookedPack* cooked_;
+  static testing::CookedPack* cooked_indirect_;
 };
 testing::CookedPack* GlesAccuracy::cooked_ = nullptr;
+testing::CookedPack* GlesAccuracy::cooked_indirect_ = nullptr;
 
 TEST_F(GlesAccuracy, GpuPathMatchesTheCpuReference) {
   run(RuntimeLimits{}, "gpu");
@@ -169,6 +177,24 @@ TEST_F(GlesAccuracy, CpuFallbackMatchesTheCpuReference) {
   RuntimeLimits limits;
   limits.force_cpu_fallback = true;
   run(limits, "cpu fallback");
+}
+
+// A cooked pack with an indirect map: what a game samples, L + the magnified I, on the float
+// path and the CPU path, against the CPU reference's L + I.
+TEST_F(GlesAccuracy, PackWithAnIndirectMapMatchesTheCpuReference) {
+  const PackView& pack = cooked_indirect_->pack;
+  ASSERT_TRUE(pack.has_indirect_map());
+  ASSERT_EQ(pack.indirect_scale(), 4u);
+  uint32_t indirect = 0;
+  for (uint32_t p = 0; p < pack.patch_count(); ++p)
+    indirect += pack.patch(p).target == pack::kTargetIndirectMap;
+  std::printf("indirect map %ux%u, %u of %u patches\n", pack.indirect_width(),
+              pack.indirect_height(), indirect, pack.patch_count());
+  ASSERT_GT(indirect, 0u);
+  run(RuntimeLimits{}, "gpu, indirect map", kMaxRelativeRmse, kMaxMedianBias, cooked_indirect_);
+  RuntimeLimits cpu;
+  cpu.force_cpu_fallback = true;
+  run(cpu, "cpu fallback, indirect map", kMaxRelativeRmse, kMaxMedianBias, cooked_indirect_);
 }
 
 // Sunlight at real values: a 100,000 lux directional light over a floor with a box, authored

@@ -13,10 +13,14 @@
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
+#include "pack_bytes.h"
 #include "synthetic.h"
 
 namespace lightpatch {
 namespace {
+
+using test::Aligned;
+using test::fix_checksum;
 
 // Golden values of tiny.lpk (format version 2).
 constexpr uint64_t kTinySize = 2816;
@@ -97,16 +101,6 @@ TEST(PackFiles, Crc32IsTheStandardCrcAtEveryAlignmentAndSplit) {
     }
 }
 
-// A copy in 8-byte aligned storage, as the loader requires.
-struct Aligned {
-  std::vector<uint64_t> words;
-  uint64_t size = 0;
-  explicit Aligned(const std::vector<uint8_t>& b, uint64_t n) : words((n + 7) / 8 + 1), size(n) {
-    if (n > 0) std::memcpy(words.data(), b.data(), n);
-  }
-  uint8_t* data() { return reinterpret_cast<uint8_t*>(words.data()); }
-};
-
 TEST(PackFiles, TruncatedAtEveryByteIsRefused) {
   for (const std::vector<uint8_t>& b : {test::build_tiny_pack(), test::build_small_pack()}) {
     for (uint64_t n = 0; n < b.size(); ++n) {
@@ -118,25 +112,6 @@ TEST(PackFiles, TruncatedAtEveryByteIsRefused) {
       ASSERT_NE(e.message[0], '\0');
     }
   }
-}
-
-// Recomputes the table checksum of a (possibly corrupt) pack so that flips reach the record
-// validation; leaves it alone if the index itself is out of bounds.
-void fix_checksum(uint8_t* d, uint64_t size) {
-  pack::Header h;
-  std::memcpy(&h, d, sizeof(h));
-  if (h.section_count == 0 || h.section_count > 9) return;
-  const uint64_t index_bytes = uint64_t(h.section_count) * sizeof(pack::SectionEntry);
-  if (64 + index_bytes > size) return;
-  uint32_t crc = crc32(d + 64, index_bytes);
-  for (uint32_t i = 0; i < h.section_count; ++i) {
-    pack::SectionEntry e;
-    std::memcpy(&e, d + 64 + i * sizeof(e), sizeof(e));
-    if (e.type == pack::kSectionAtlasData || e.type == pack::kSectionMeshData) continue;
-    if (e.offset > size || e.length > size - e.offset) return;
-    crc = crc32(d + e.offset, e.length, crc);
-  }
-  std::memcpy(d + 20, &crc, 4);
 }
 
 // Uses everything a valid view exposes (ASan catches any read out of bounds).

@@ -55,7 +55,12 @@ struct SyntheticPack {
 inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   using namespace pack;
   std::mt19937 rng(o.seed);
-  auto uniform = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
+  // The same bytes on every target (the golden pack is checked under qemu too): an integer draw
+  // whose product with b - a is exact in double, so that no fused multiply-add can change it.
+  auto uniform = [&](float a, float b) {
+    const uint32_t k = std::uniform_int_distribution<uint32_t>(0, 1u << 20)(rng);
+    return float(double(a) + double(b - a) * (double(k) / 1048576.0));
+  };
   auto integer = [&](uint32_t a, uint32_t b) {
     return std::uniform_int_distribution<uint32_t>(a, b)(rng);
   };

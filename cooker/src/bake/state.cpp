@@ -9,8 +9,8 @@
 
 namespace lightpatch::cooker {
 
-FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
-                                   Report& report) const {
+FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress, Report& report,
+                                   FloatImage* blocks) const {
   impl_->trace_shared(progress, report);
   const BakeContext& b = impl_->ctx;
   const Scene& scene = b.scene;
@@ -66,7 +66,7 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
         threshold = std::min(threshold, b.lights[li].threshold * max3(radiant[li]));
     }
     const FloatImage direct = out;
-    b.indirect->add_state(direct, visible, threshold, out);
+    b.indirect->add_state(direct, visible, threshold, out, blocks);
     report.stage_time("bake.state_bounce", progress.end());
   }
   report_bake(*impl_, report);

@@ -64,6 +64,7 @@ JobHash hash_of(const std::string& name) {
 // to settings_from_json, or a job would run with its default. (Sizes on 64-bit Linux.)
 static_assert(sizeof(LayoutOptions) == 28, "LayoutOptions changed: update job_dir.cpp");
 static_assert(sizeof(BakeOptions) == 56, "BakeOptions changed: update job_dir.cpp");
+static_assert(sizeof(ImportLimits) == 48, "ImportLimits changed: update job_dir.cpp");
 
 json settings_json(const CookSettings& s) {
   const BakeOptions& b = s.bake;
@@ -87,7 +88,11 @@ json settings_json(const CookSettings& s) {
           {"indirect_scale", b.indirect_scale},
           {"denoise", b.denoise},
           {"plan_effects", b.plan_effects},
-          {"output_step", b.output_step}};
+          {"output_step", b.output_step},
+          {"max_triangles", s.import.max_triangles},
+          {"max_vertices", s.import.max_vertices},
+          {"max_texture_pixels", s.import.max_texture_pixels},
+          {"uri_roots", s.import.uri_roots}};
 }
 
 template <typename T>
@@ -142,6 +147,10 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   s.bake.output_step = field<float>(j, "output_step", file);
   if (!(s.bake.output_step >= 0.0f && s.bake.output_step <= 1e30f))
     throw CookError(file + ": \"output_step\" out of range");
+  s.import.max_triangles = field<uint64_t>(j, "max_triangles", file);
+  s.import.max_vertices = field<uint64_t>(j, "max_vertices", file);
+  s.import.max_texture_pixels = field<uint64_t>(j, "max_texture_pixels", file);
+  s.import.uri_roots = field<std::vector<std::string>>(j, "uri_roots", file);
   return s;
 }
 
@@ -306,8 +315,8 @@ struct Replanned {
 Replanned replan(const std::string& dir, const CookSettings& s, int threads, bool write_gather,
                  Progress& progress, Report& report) {
   Replanned r;
-  r.scene =
-      std::make_unique<PreparedScene>(prepare_scene(s.scene_path, s.layout, progress, report));
+  r.scene = std::make_unique<PreparedScene>(
+      prepare_scene(s.scene_path, s.layout, progress, report, s.import));
   BakeOptions bake = s.bake;
   bake.threads = threads;
   r.store = std::make_unique<DirGatherStore>(dir, write_gather);

@@ -95,11 +95,11 @@ class GatherIntegrator final : public IndirectIntegrator {
   }
 
   void add_state(const FloatImage& direct, const std::vector<uint8_t>& present, float threshold,
-                 FloatImage& fine) const override {
+                 FloatImage& fine, FloatImage* blocks) const override {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
     SolveStats st;
     add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st).total(), fine,
-        nullptr);
+        blocks);
     count(st, states_);
   }
 

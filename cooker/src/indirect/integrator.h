@@ -63,9 +63,10 @@ class IndirectIntegrator {
   // as it is.
   virtual void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const = 0;
   // A whole state's bounce light from its direct light (3 channels) with the objects `present`,
-  // added to `fine`. `threshold`: the finest significance among the state's groups.
+  // added to `fine` (and its block image to `blocks`, may be null, as add() does).
+  // `threshold`: the finest significance among the state's groups.
   virtual void add_state(const FloatImage& direct, const std::vector<uint8_t>& present,
-                         float threshold, FloatImage& fine) const = 0;
+                         float threshold, FloatImage& fine, FloatImage* blocks) const = 0;
   // Settings and statistics for the report.
   virtual nlohmann::json describe() const = 0;
 };

@@ -307,7 +307,9 @@ FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,
     for (int by = 0; by < bh; ++by)
       for (int bx = 0; bx < bw; ++bx) {
         const size_t b = size_t(by) * bw + size_t(bx);
-        if (filled[b] || region[b] < 0) continue;
+        // Blocks outside every region too: a chart that reaches its region's edge (a node's
+        // TEXCOORD_1 layout filling its rectangle, the page's edge) reads them.
+        if (filled[b]) continue;
         glm::vec3 sum(0.0f);
         float n = 0.0f;
         for (int dy = -1; dy <= 1; ++dy)
@@ -315,7 +317,7 @@ FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,
             const int nx = bx + dx, ny = by + dy;
             if (nx < 0 || ny < 0 || nx >= bw || ny >= bh) continue;
             const size_t q = size_t(ny) * bw + size_t(nx);
-            if (!filled[q] || region[q] != region[b]) continue;
+            if (!filled[q] || (region[b] >= 0 && region[q] != region[b])) continue;
             sum += glm::vec3(out.data[q * 3], out.data[q * 3 + 1], out.data[q * 3 + 2]);
             n += 1.0f;
           }

@@ -101,8 +101,8 @@ void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseM
 // The pack's indirect map of a coarse map, for a layout on s x s blocks (Layout::align = s > 1,
 // pack_format.h "Two target maps"): each block holds the mean, over its valid texels, of their
 // coarse texels' values; a block with none (a chart's ring) the mean of its filled 8-neighbours
-// in the same region, two rings out, so that magnifying at a chart's edge reads that chart's own
-// light. (width / s) x (height / s) blocks, 3 channels. Linear in the map.
+// in the same region (any region for a block outside every region), two rings out, so that
+// magnifying at a chart's edge reads that chart's own light. (width / s) x (height / s) blocks, 3 channels. Linear in the map.
 FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s, const CoarseMap& map);
 
 // Adds the block image, magnified exactly as the runtime magnifies the indirect map

@@ -32,7 +32,8 @@ FileMapping& FileMapping::operator=(FileMapping&& other) noexcept {
 
 bool FileMapping::open(const char* path, char* message, unsigned message_size) {
   close();
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO must not wait for a writer; fstat then refuses it.
+  const int fd = ::open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     std::snprintf(message, message_size, "cannot open '%s': %s", path, std::strerror(errno));
     return false;

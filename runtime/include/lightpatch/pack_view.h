@@ -25,7 +25,26 @@
 
 namespace lightpatch {
 
-// A name inside the pack's string section; not NUL-terminated.
+// What a pack may ask of a recomposer beyond the format's own ranges (pack_format.h).
+// PackView::open refuses (Status::kOverLimit) a pack over them before anything is allocated for it,
+// so that `lightpatch verify` accepts what the recomposers can hold; a game on a device with more
+// memory passes larger ones. (How bright a pack may be is the planner's check_authored_map_bound.)
+struct RecomposeLimits {
+  // Light-map texels. The GLES runtime holds the sampled RGBA16F map and an accumulator (RGBA32F
+  // or RGBA16F, or double RGB on its CPU path): 16 to 32 bytes a texel, 256 to 512 MiB at the
+  // default; the CPU recomposer two float RGB maps, 384 MiB. An indirect map adds at most a
+  // quarter of that (scale >= 2), which this limit leaves to the light map's margin.
+  uint64_t max_lightmap_texels = uint64_t(4096) * 4096;
+
+  // No limit beyond the format's own ranges (the cooker's check of what it wrote).
+  static RecomposeLimits format_only() {
+    RecomposeLimits l;
+    l.max_lightmap_texels = uint64_t(pack::kMaxLightmapSize) * pack::kMaxLightmapSize;
+    return l;
+  }
+};
+
+// A name inside the pack's string section; not NUL-terminated, valid UTF-8.
 struct Name {
   const char* data;
   uint32_t length;
@@ -39,8 +58,14 @@ class PackView {
   // Validates `size` bytes at `data` (must be 8-byte aligned, as mmap and malloc give; for bytes
   // that may not be, e.g. an APK asset's 4-byte alignment, use PackMemory) and on
   // success fills *out. On failure returns the error and fills *error (if non-null) with a
-  // message naming the problem; *out is left empty.
-  static Status open(const void* data, uint64_t size, PackView* out, Error* error);
+  // message naming the problem; *out is left empty. A valid pack over `limits` gives kOverLimit
+  // with a message naming the RecomposeLimits field.
+  static Status open(const void* data, uint64_t size, const RecomposeLimits& limits, PackView* out,
+                     Error* error);
+  // The same with the default RecomposeLimits.
+  static Status open(const void* data, uint64_t size, PackView* out, Error* error) {
+    return open(data, size, RecomposeLimits(), out, error);
+  }
 
   bool valid() const { return header_ != nullptr; }
   const pack::Header& header() const { return *header_; }

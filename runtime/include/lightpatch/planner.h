@@ -252,4 +252,14 @@ class Planner {
   void* block_ = nullptr;  // one allocation holding every array above
 };
 
+// The largest bound of the authored state's light map (Planner::wanted_map_bound) a runtime
+// opens: the float sums of its patches then stay finite with 300x headroom. Runtime::open refuses
+// a pack above it (kOutOfRange); no limit raises it.
+constexpr float kMaxAuthoredMapBound = 1.0e36f;
+
+// kOutOfRange, with a message giving the bound, when `pack`'s authored light map could exceed
+// kMaxAuthoredMapBound: what `lightpatch verify` checks beyond PackView::open. Allocates a
+// Planner (a light map of scratch) for the call.
+Status check_authored_map_bound(const PackView& pack, Error* error);
+
 }  // namespace lightpatch

@@ -17,6 +17,7 @@ enum class Status : int32_t {
   kUnsupported,       // the device lacks a required feature
   kGlError,           // the GL driver reported an error
   kNotFound,          // a name lookup failed
+  kOverLimit,         // valid, but asks for more than the stated limits (RecomposeLimits)
   kOutOfRange,        // a value the light map cannot represent (see Runtime::set_light)
 };
 

@@ -2,6 +2,8 @@
 // offset and length is checked in 64-bit arithmetic written so that no sum can overflow.
 #include "lightpatch/pack_view.h"
 
+#include "lightpatch/utf8.h"
+
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -99,8 +101,8 @@ struct Parsed {
 
 class Validator {
  public:
-  Validator(const uint8_t* bytes, uint64_t size, Error* error)
-      : b_(bytes), size_(size), error_(error) {}
+  Validator(const uint8_t* bytes, uint64_t size, const RecomposeLimits& limits, Error* error)
+      : b_(bytes), size_(size), limits_(limits), error_(error) {}
 
   Status run(Parsed* out);
 
@@ -108,6 +110,7 @@ class Validator {
   Status fail(Status s, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
   Status check_name(const char* what, uint32_t index, uint32_t offset, uint32_t length,
                     bool allow_empty);
+  Status check_limits(const Header& h);
   template <typename T>
   const T* at(uint64_t offset) const {
     return reinterpret_cast<const T*>(b_ + offset);
@@ -115,6 +118,7 @@ class Validator {
 
   const uint8_t* b_;
   uint64_t size_;
+  const RecomposeLimits& limits_;
   Error* error_;
   Section sections_[kSectionTypeMax + 1];
 };
@@ -139,6 +143,21 @@ Status Validator::check_name(const char* what, uint32_t index, uint32_t offset, 
     return fail(Status::kCorrupt, "%s %u: name %u+%u exceeds the string section (%llu bytes)", what,
                 index, offset, length,
                 static_cast<unsigned long long>(sections_[kSectionStrings].length));
+  }
+  // Names are printed, matched against state files and written to JSON by the tools.
+  if (!utf8_valid(at<char>(sections_[kSectionStrings].offset) + offset, length)) {
+    return fail(Status::kCorrupt, "%s %u: name is not valid UTF-8", what, index);
+  }
+  return Status::kOk;
+}
+
+Status Validator::check_limits(const Header& h) {
+  const uint64_t texels = uint64_t(h.lightmap_width) * h.lightmap_height;
+  if (texels > limits_.max_lightmap_texels) {
+    return fail(Status::kOverLimit,
+                "light map %ux%u is %llu texels, over the limit of %llu (max_lightmap_texels)",
+                h.lightmap_width, h.lightmap_height, static_cast<unsigned long long>(texels),
+                static_cast<unsigned long long>(limits_.max_lightmap_texels));
   }
   return Status::kOk;
 }
@@ -499,6 +518,8 @@ Status Validator::run(Parsed* out) {
     }
   }
 
+  if (Status s = check_limits(h); s != Status::kOk) return s;
+
   out->header = &h;
   out->lights = lights;
   out->objects = objects;
@@ -513,11 +534,12 @@ Status Validator::run(Parsed* out) {
 
 }  // namespace
 
-Status PackView::open(const void* data, uint64_t size, PackView* out, Error* error) {
+Status PackView::open(const void* data, uint64_t size, const RecomposeLimits& limits, PackView* out,
+                      Error* error) {
   if (out == nullptr) return set_error(error, Status::kInvalidArgument, "null output view");
   *out = PackView();
   Parsed p;
-  Validator v(static_cast<const uint8_t*>(data), size, error);
+  Validator v(static_cast<const uint8_t*>(data), size, limits, error);
   const Status s = v.run(&p);
   if (s != Status::kOk) return s;
   out->bytes_ = static_cast<const uint8_t*>(data);

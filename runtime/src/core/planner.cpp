@@ -669,4 +669,16 @@ bool Planner::idle() const {
   return true;
 }
 
+Status check_authored_map_bound(const PackView& pack, Error* error) {
+  Planner planner;
+  if (Status s = planner.init(pack, PlannerLimits(), error); s != Status::kOk) return s;
+  const float bound = planner.wanted_map_bound();
+  if (!(bound <= kMaxAuthoredMapBound)) {
+    return set_error(error, Status::kOutOfRange,
+                     "the authored light map could reach %g, beyond the %g the runtime opens",
+                     double(bound), double(kMaxAuthoredMapBound));
+  }
+  return Status::kOk;
+}
+
 }  // namespace lightpatch

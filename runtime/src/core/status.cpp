@@ -29,6 +29,8 @@ const char* status_name(Status status) {
       return "GL error";
     case Status::kNotFound:
       return "not found";
+    case Status::kOverLimit:
+      return "over limit";
     case Status::kOutOfRange:
       return "out of range";
   }

@@ -239,7 +239,7 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   // The presentation scale: the smallest power of two that brings the authored state's bound
   // below the ceiling.
   const float bound = planner_.wanted_map_bound();
-  if (!(bound <= 1.0e36f)) {
+  if (!(bound <= kMaxAuthoredMapBound)) {
     return set_error(error, Status::kOutOfRange,
                      "runtime: the pack's authored light map could exceed the float range "
                      "(bound %g)",

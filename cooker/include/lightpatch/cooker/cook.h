@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/pack_builder.h"
@@ -39,9 +40,9 @@ int layout_align(const BakeOptions& bake);
 // Layout, tracer and texels for an imported scene; scene and layout statistics into `report`.
 PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress& progress,
                             Report& report);
-// Imports `path` (glTF) first. Throws CookError.
+// Imports `path` (glTF, within `limits`) first. Throws CookError.
 PreparedScene prepare_scene(const std::string& path, const LayoutOptions& options,
-                            Progress& progress, Report& report);
+                            Progress& progress, Report& report, const ImportLimits& limits = {});
 
 // Makes both sides of every chart cut agree and fills unused texels, in every map.
 void finalize_maps(BakedMaps& maps, const PreparedScene& p, Progress& progress, Report& report);

@@ -22,6 +22,7 @@
 
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/cook_jobs.h"
+#include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/progress.h"
 #include "lightpatch/cooker/report.h"
@@ -36,6 +37,8 @@ struct CookSettings {
   std::string scene_path;
   LayoutOptions layout;
   BakeOptions bake;
+  // Refusals only (no output depends on them), kept so that every job imports what plan did.
+  ImportLimits import;
 };
 
 // Imports, lays out and plans the cook (no tracing of bounce rays), creates `dir` if needed and

@@ -29,6 +29,8 @@ StateSpec parse_state_json(const std::string& text, const std::string& what);  /
 StateSpec load_state_file(const std::string& path);                            // throws CookError
 // --states: one JSON state per non-empty line.
 std::vector<StateSpec> load_states_jsonl(const std::string& path);  // throws CookError
+// The same from text; `what` (the file's name) prefixes every error with the line number.
+std::vector<StateSpec> parse_states_jsonl(const std::string& text, const std::string& what);
 
 // A state resolved against a scene: what every integrator that bakes a state lights with.
 struct ResolvedState {
