@@ -33,8 +33,7 @@ struct PreparedScene {
 };
 
 // The layout alignment a bake's options call for (LayoutOptions::align, the pack's indirect
-// scale): BakeOptions::indirect_scale when given; otherwise 2 with bounce light on (1 if the
-// preset's gather level is 1), 1 without.
+// scale): BakeOptions::indirect_scale when given, 1 (no indirect map) otherwise.
 int layout_align(const BakeOptions& bake);
 
 // Layout, tracer and texels for an imported scene; scene and layout statistics into `report`.
