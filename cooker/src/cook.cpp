@@ -2,6 +2,7 @@
 
 #include <mutex>
 
+#include "lightpatch/cooker/cook_jobs.h"
 #include "lightpatch/cooker/import.h"
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/unwrap.h"
@@ -94,13 +95,11 @@ PackOptions pack_options(const BakeOptions& bake) {
 
 std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, Progress& progress,
                                Report& report, BakedMaps* maps_out) {
-  BakedMaps maps = bake_maps(p.scene, p.layout, p.texels, *p.tracer, bake, progress, report);
-  finalize_maps(maps, p, progress, report);
-  std::vector<uint8_t> pack = timed(progress, report, "pack", [&] {
-    return build_pack(p.scene, p.layout, maps, pack_options(bake), report);
-  });
-  if (maps_out) *maps_out = std::move(maps);
-  return pack;
+  // The cook's jobs in-process: the same code as `plan`, `cook-job` and `assemble`.
+  const CookJobs jobs(p, bake, progress, report);
+  std::vector<GroupBake> results;
+  for (size_t i = 0; i < jobs.size(); ++i) results.push_back(jobs.run(i, progress, report));
+  return jobs.assemble(std::move(results), progress, report, maps_out);
 }
 
 FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const BakeOptions& bake,

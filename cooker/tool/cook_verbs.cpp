@@ -10,6 +10,7 @@
 #include <string>
 
 #include "args.h"
+#include "cook_options.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/cook.h"
 #include "lightpatch/cooker/error.h"
@@ -34,19 +35,9 @@ namespace {
 
 using namespace lightpatch::cooker;
 
-struct CookOptions {
-  std::string scene_path;
-  std::string output;
-  std::string report_path;
-  LayoutOptions layout;
-  BakeOptions bake;
-  ImportLimits import;
-  bool quiet = false;
-};
+}  // namespace
 
-// Options shared by cook and bake-state (DESIGN.md, Command line). Options first: a positional
-// is any item not starting with '-', which an option's value could be.
-CookOptions parse_common(Args& args, const char* output_what) {
+CookOptions parse_cook_options(Args& args, const char* output_what) {
   CookOptions o;
   if (!args.option("-o", &o.output) && !args.option("--output", &o.output)) {
     throw ArgsError(std::string("missing -o ") + output_what);
@@ -97,6 +88,7 @@ CookOptions parse_common(Args& args, const char* output_what) {
   o.bake.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));
   o.bake.threads = args.int_option("--threads", 0, 1, 1024);
   o.bake.plan_effects = !args.flag("--no-plan");
+  o.bake.output_step = args.float_option("--output-step", 0.0f, 1e-30f, 1e30f);
   o.quiet = args.flag("--quiet", "-q");
   o.layout.align = layout_align(o.bake);
   o.layout.align_required = o.bake.indirect_scale > 0;
@@ -104,7 +96,6 @@ CookOptions parse_common(Args& args, const char* output_what) {
   return o;
 }
 
-// Fails early, before a long cook, when the output's folder cannot take a file.
 void probe_output_folder(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   const std::string dir =
@@ -115,6 +106,8 @@ void probe_output_folder(const std::string& path) {
   ::close(fd);
   ::unlink(probe.c_str());
 }
+
+namespace {
 
 void finish_report(const CookOptions& o, Report& report, double seconds) {
   if (o.report_path.empty()) return;
@@ -165,7 +158,7 @@ int verb_cook(Args& args) {
   const bool measure = args.flag("--measure-plan");
   std::string gltf_path;
   args.option("--write-gltf", &gltf_path);
-  CookOptions o = parse_common(args, "OUT.lpk");
+  CookOptions o = parse_cook_options(args, "OUT.lpk");
   o.scene_path = args.positional("SCENE");
   args.finish();
   if (measure && !o.bake.plan_effects) {
@@ -231,7 +224,7 @@ int verb_bake_state(Args& args) {
   const PreviewOptions picture = parse_preview_options(args, "--png");
   if (picture.view == PreviewView::kAtlases)
     throw ArgsError("--view atlases shows a pack's atlases: use lightpatch preview");
-  CookOptions o = parse_common(args, "MAP.pfm");
+  CookOptions o = parse_cook_options(args, "MAP.pfm");
   o.scene_path = args.positional("SCENE");
   args.finish();
   const bool reference = o.bake.integrator == Integrator::kReference;

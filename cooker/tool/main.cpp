@@ -54,6 +54,9 @@ constexpr const char* kCookOptionsHelp =
     "                         traced and kept, every measured overlap correction kept, tinted\n"
     "                         patches kept at 3 channels (for bake-state: every object's bounce)\n"
 
+    "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
+    "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
+    "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
     "  --area-samples N       samples per texel for lights with a radius and emissive surfaces\n"
     "  --texel-samples N      points of each texel's surface patch that direct light is averaged\n"
     "                         over (anti-aliased shadow edges); 1 = the texel's sample point\n"
@@ -123,6 +126,41 @@ constexpr const char* kBakeStateHelp =
     "  --png OUT.png          also a picture of the map (the options "
     "below)\n" LIGHTPATCH_PREVIEW_HELP;
 
+constexpr const char* kPlanHelp =
+    "Plans a cook as jobs (one per light group) in a job folder, for cook-job, assemble and\n"
+    "tools/farm/lightpatch-farm (Slurm): imports, lays out and plans once, writes "
+    "DIR/manifest.json\n"
+    "and DIR/jobs/NAME.json, and prints the job names on stdout, one a line, in an order they may\n"
+    "run. A name is g<group>-<content hash of everything its output depends on>: planning again\n"
+    "after an edit keeps the names, and reuses the results, of the jobs the edit cannot change.\n\n"
+    "options:\n"
+    "  -o, --output DIR       the job folder (created if needed; results of earlier plans stay)\n";
+
+constexpr const char* kCookJobHelp =
+    "Runs jobs of a job folder (made by plan) and writes each result atomically to\n"
+    "DIR/results/JOB.lpg. A job whose result is there with its hash is skipped; several jobs\n"
+    "in one call share one import, layout and gather. Fails, writing nothing, if the scene\n"
+    "changed since plan or the folder was planned by another build of lightpatch.\n\n"
+    "options:\n"
+    "  --threads N            worker threads (default: all cores)\n"
+    "  --report REPORT.json   the jobs' decisions and timings\n"
+    "  -q, --quiet            no progress on stderr\n";
+
+constexpr const char* kJobsHelp =
+    "Lists the jobs of a job folder, one a line, in an order they may run; a summary on stderr.\n\n"
+    "options:\n"
+    "  --pending              only the jobs without a valid result\n";
+
+constexpr const char* kAssembleHelp =
+    "Checks that every job of a job folder has its result (naming each missing or stale one),\n"
+    "then finalizes and packs: the same bytes as `lightpatch cook` with the scene and options\n"
+    "given to plan.\n\n"
+    "options:\n"
+    "  -o, --output OUT.lpk   the pack (written atomically)\n"
+    "  --threads N            worker threads (default: all cores)\n"
+    "  --report REPORT.json   decisions, pairs, timings and the pack's statistics\n"
+    "  -q, --quiet            no progress on stderr\n";
+
 constexpr const char* kAccuracyHelp =
     "Sweeps the cook's quality knobs and measures what each setting buys in error and costs in\n"
     "time: the quality presets, then, around the preview preset, gather rays, indirect level,\n"
@@ -179,9 +217,14 @@ const Verb kVerbs[] = {
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
-     "[--seed N] "
-     "[--threads N] [--quiet]",
+     "[--output-step E] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
+    {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
+    {"cook-job", lightpatch::tool::verb_cook_job,
+     "cook-job DIR JOB [JOB...] [--threads N] [--report REPORT.json] [--quiet]", kCookJobHelp},
+    {"jobs", lightpatch::tool::verb_jobs, "jobs DIR [--pending]", kJobsHelp},
+    {"assemble", lightpatch::tool::verb_assemble,
+     "assemble DIR -o OUT.lpk [--threads N] [--report REPORT.json] [--quiet]", kAssembleHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
      "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator gather|reference] "
      "[--samples N] [--std-error ERR.pfm] [cook's options]",
@@ -241,14 +284,21 @@ int main(int argc, char** argv) {
     for (const std::string& item : args.items) {
       if (item == "--help" || item == "-h") {
         std::printf("usage: lightpatch %s\n\n%s", v.usage, v.help);
-        if (v.run == lightpatch::tool::verb_cook || v.run == lightpatch::tool::verb_bake_state) {
+        if (v.run == lightpatch::tool::verb_cook || v.run == lightpatch::tool::verb_bake_state ||
+            v.run == lightpatch::tool::verb_plan) {
           std::printf("%s", kCookOptionsHelp);
         }
         std::printf("\nlimits (README, \"Limits\"):\n");
-        if (v.run == lightpatch::tool::verb_cook || v.run == lightpatch::tool::verb_bake_state ||
-            v.run == lightpatch::tool::verb_accuracy) {
+        // A job folder's verbs import with the limits plan recorded and read no pack.
+        const bool imports =
+            v.run == lightpatch::tool::verb_cook || v.run == lightpatch::tool::verb_bake_state ||
+            v.run == lightpatch::tool::verb_accuracy || v.run == lightpatch::tool::verb_plan;
+        const bool job_folder = v.run == lightpatch::tool::verb_cook_job ||
+                                v.run == lightpatch::tool::verb_jobs ||
+                                v.run == lightpatch::tool::verb_assemble;
+        if (imports) {
           std::printf("%s", lightpatch::tool::kImportLimitsHelp);
-        } else {
+        } else if (!job_folder) {
           std::printf("%s", lightpatch::tool::kRecomposeLimitsHelp);
         }
         std::printf("%s", lightpatch::tool::kInputSizeHelp);

@@ -14,5 +14,9 @@ int verb_recompose(Args& args);   // pack_verbs.cpp
 int verb_preview(Args& args);     // pack_verbs.cpp
 int verb_bench(Args& args);       // bench_verb.cpp
 int verb_accuracy(Args& args);    // accuracy_verb.cpp
+int verb_plan(Args& args);        // farm_verbs.cpp
+int verb_cook_job(Args& args);    // farm_verbs.cpp
+int verb_jobs(Args& args);        // farm_verbs.cpp
+int verb_assemble(Args& args);    // farm_verbs.cpp
 
 }  // namespace lightpatch::tool

@@ -270,7 +270,16 @@ TEST(Bake, OutputStepIsThePercentileOverTwoFiftyFive) {
   Report report;
   const BakedMaps maps =
       bake_maps(scene, test::bare_layout(8, 8), texels, *tracer, options(), progress, report);
-  EXPECT_FLOAT_EQ(maps.output_step, 1.0f);
+  // 255 lux everywhere: the percentile's step is 1, rounded down to a quarter octave (of the
+  // scene's own irradiance unit, 1 cd at its diagonal).
+  EXPECT_LE(maps.output_step, 1.0f);
+  EXPECT_GT(maps.output_step, 1.0f / 1.1893f);
+  // Pinned, the step is the one given.
+  BakeOptions pinned = options();
+  pinned.output_step = 0.37f;
+  EXPECT_EQ(bake_maps(scene, test::bare_layout(8, 8), texels, *tracer, pinned, progress, report)
+                .output_step,
+            0.37f);
   // A black scene still gets a positive step.
   scene.lights.clear();
   const BakedMaps dark =

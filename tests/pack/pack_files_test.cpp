@@ -76,6 +76,31 @@ TEST(PackFiles, GoldenBytesOfVersion2) {
   EXPECT_EQ(crc32(b.data(), b.size()), kTinyCrc);
 }
 
+// CRC-32 bit by bit from its definition (reflected, polynomial 0xEDB88320): the reference for
+// the table-driven crc32 over every alignment, length and split into chained calls.
+uint32_t crc32_bitwise(const uint8_t* p, size_t n) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < n; ++i) {
+    c ^= p[i];
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? (0xEDB88320u ^ (c >> 1)) : (c >> 1);
+  }
+  return ~c;
+}
+
+TEST(PackFiles, Crc32IsTheStandardCrcAtEveryAlignmentAndSplit) {
+  EXPECT_EQ(crc32("123456789", 9), 0xCBF43926u);  // the standard check value
+  std::vector<uint8_t> b(300);
+  uint32_t x = 12345;
+  for (uint8_t& v : b) v = uint8_t((x = x * 1664525u + 1013904223u) >> 24);
+  for (size_t start = 0; start < 9; ++start)
+    for (size_t n = 0; start + n <= b.size(); n += 7) {
+      const uint32_t want = crc32_bitwise(b.data() + start, n);
+      EXPECT_EQ(crc32(b.data() + start, n), want) << start << " " << n;
+      const size_t half = n / 2 + (n > 4 ? start % 3 : 0);  // <= n
+      EXPECT_EQ(crc32(b.data() + start + half, n - half, crc32(b.data() + start, half)), want);
+    }
+}
+
 TEST(PackFiles, TruncatedAtEveryByteIsRefused) {
   for (const std::vector<uint8_t>& b : {test::build_tiny_pack(), test::build_small_pack()}) {
     for (uint64_t n = 0; n < b.size(); ++n) {

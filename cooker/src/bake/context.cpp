@@ -60,6 +60,26 @@ void check_bake_inputs(const Scene& scene, const TexelSet& texels) {
 
 namespace {
 
+// The largest unit * 2^(k/4) <= v (v, unit > 0, finite). The output step comes from every
+// light of the authored state, and every light group's maps and content hash (cook_jobs.h) from
+// the step: rounded, moving or recolouring one light keeps the step, so the other groups' jobs
+// are reused, unless it crosses a quarter octave. Never coarser than the unrounded step, at most
+// 16% finer. `unit` scales as irradiance does with the scene (1 cd at the scene's diagonal), so a
+// scene scaled by k gets the step scaled by 1/k^2 exactly.
+float quarter_octave_below(float v, float unit) {
+  static constexpr double kRoots[4] = {1.0, 1.189207115002721, 1.414213562373095,
+                                       1.681792830507429};
+  if (!(unit > 0.0f) || !std::isfinite(unit)) unit = 1.0f;
+  const double x = double(v) / double(unit);
+  int k = static_cast<int>(std::floor(4.0 * std::log2(x)));
+  auto grid = [&](int i) {
+    const int r = ((i % 4) + 4) % 4;
+    return std::ldexp(kRoots[r], (i - r) / 4);
+  };
+  if (grid(k) > x) --k;
+  return float(grid(k) * double(unit));
+}
+
 // Unshadowed irradiance of the authored state (max channel) at each valid texel; its 99th
 // percentile is the top of the 8-bit range, output_step one 255th of it.
 float percentile_step(const BakeContext& b, bool authored) {
@@ -86,6 +106,16 @@ float percentile_step(const BakeContext& b, bool authored) {
       values[t] = std::isfinite(max3(e)) ? max3(e) : 0.0f;
     }
   });
+  // Over the static surfaces' texels where there are any: semi-dynamic objects move and hide, and
+  // the step (so every group's maps and job hash) should not follow them.
+  std::vector<float> on_static;
+  for (size_t t = 0; t < values.size(); ++t) {
+    const int32_t m = t < texels.mesh.size() ? texels.mesh[t] : -1;
+    const bool object =
+        m >= 0 && size_t(m) < b.scene.meshes.size() && b.scene.meshes[size_t(m)].object >= 0;
+    if (values[t] != -1.0f && !object) on_static.push_back(values[t]);
+  }
+  if (!on_static.empty()) values = std::move(on_static);
   values.erase(std::remove(values.begin(), values.end(), -1.0f), values.end());
   if (values.empty()) return 0.0f;
   const size_t k = std::min(values.size() - 1, values.size() * 99 / 100);
@@ -141,7 +171,8 @@ BakeContext::BakeContext(const Scene& s, const Layout& l, const TexelSet& t, con
   // The floor is for a black scene only: as a floor under every scene it was an absolute
   // irradiance, not scaled with the scene (a 10 km room under the same candela is 1e-8 as bright
   // as a 1 m one, below 1e-6, and every texel was culled as insignificant).
-  output_step = step > 0.0f ? step : kMinOutputStep;
+  output_step = step > 0.0f ? quarter_octave_below(step, 1.0f / (scale * scale)) : kMinOutputStep;
+  if (o.output_step > 0.0f) output_step = o.output_step;
   float s_max = 0.0f;
   for (const Light& light : scene.lights)
     s_max = std::max(s_max, max3(light.color) * light.intensity);

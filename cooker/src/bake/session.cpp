@@ -88,25 +88,39 @@ void report_bake(const BakeSession::Impl& impl, Report& report) {
   j["rays_per_second"] =
       total_s > 0.0 ? static_cast<double>(j["rays"].get<uint64_t>()) / total_s : 0.0;
   nlohmann::json& ind = report.root()["indirect"];
-  ind["enabled"] = b.indirect != nullptr;
+  ind["enabled"] = b.options.indirect;
   if (b.indirect) ind.update(b.indirect->describe());
 }
 
 BakeSession::BakeSession(const Scene& scene, const Layout& layout, const TexelSet& texels,
                          const Tracer& tracer, const BakeOptions& options, Progress& progress,
-                         Report& report) {
+                         Report& report, GatherStore* store) {
   if (options.integrator == Integrator::kReference)
     throw CookError("the reference path tracer bakes single states (bake_reference), not maps");
   progress.begin("plan", 1);
-  impl_ = std::make_unique<Impl>(scene, layout, texels, tracer, options);
+  impl_ = std::make_unique<Impl>(scene, layout, texels, tracer, options, store);
   impl_->rays0 = tracer.rays_traced();
   impl_->plan = make_plan(impl_->ctx);
   report_decisions(scene, impl_->plan.decisions, report);
   progress.end();
-  if (options.indirect) impl_->ctx.indirect = make_gather_integrator(impl_->ctx, progress, report);
+}
+
+void BakeSession::Impl::trace_shared(Progress& progress, Report& report) {
+  std::call_once(traced, [&] {
+    if (ctx.options.indirect)
+      ctx.indirect = make_gather_integrator(ctx, gather_store, progress, report);
+  });
+}
+
+void BakeSession::trace_shared(Progress& progress, Report& report) const {
+  impl_->trace_shared(progress, report);
 }
 
 BakeSession::~BakeSession() = default;
+
+const BakeSession::Impl& BakeSession::impl() const {
+  return *impl_;
+}
 
 const BakePlan& BakeSession::plan() const {
   return impl_->plan;
@@ -119,6 +133,7 @@ float BakeSession::output_step() const {
 GroupBake BakeSession::bake_group(size_t group, Progress& progress, Report& report) const {
   if (group >= impl_->plan.groups.size())
     throw CookError("bake: no light group " + std::to_string(group));
+  impl_->trace_shared(progress, report);
   return bake_light_group(impl_->ctx, impl_->plan, group, progress, report);
 }
 

@@ -11,6 +11,7 @@ namespace lightpatch::cooker {
 
 FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress, Report& report,
                                    FloatImage* blocks) const {
+  impl_->trace_shared(progress, report);
   const BakeContext& b = impl_->ctx;
   const Scene& scene = b.scene;
   const TexelSet& texels = b.texels;

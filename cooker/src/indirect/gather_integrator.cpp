@@ -33,8 +33,15 @@ constexpr float kBounceTolerance = 0.02f;
 
 class GatherIntegrator final : public IndirectIntegrator {
  public:
-  GatherIntegrator(const BakeContext& b, Progress& progress, Report& report)
+  GatherIntegrator(const BakeContext& b, GatherStore* store, Progress& progress, Report& report)
       : b_(b), preset_(gather_preset(b.options)) {
+    progress.begin("load gather rays", 1);
+    const bool loaded = store && store->load(op_, progress);
+    const double load_s = progress.end();
+    if (loaded) {
+      report.stage_time("bake.gather_load", load_s);
+      return;
+    }
     progress.begin("gather rays", 1);
     GatherOptions go;
     go.rays = preset_.rays;
@@ -42,6 +49,7 @@ class GatherIntegrator final : public IndirectIntegrator {
     go.threads = b.threads;
     op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
     report.stage_time("bake.gather_rays", progress.end());
+    if (store) store->save(op_, progress);
   }
 
   GroupBounce prepare(const FloatImage& direct, float threshold) const override {
@@ -144,9 +152,9 @@ class GatherIntegrator final : public IndirectIntegrator {
 
 }  // namespace
 
-std::unique_ptr<IndirectIntegrator> make_gather_integrator(const BakeContext& b, Progress& progress,
-                                                           Report& report) {
-  return std::make_unique<GatherIntegrator>(b, progress, report);
+std::unique_ptr<IndirectIntegrator> make_gather_integrator(const BakeContext& b, GatherStore* store,
+                                                           Progress& progress, Report& report) {
+  return std::make_unique<GatherIntegrator>(b, store, progress, report);
 }
 
 }  // namespace lightpatch::cooker

@@ -71,8 +71,21 @@ class IndirectIntegrator {
   virtual nlohmann::json describe() const = 0;
 };
 
-// Final gathering (gather.h): traces the gather rays of the context's texels.
-std::unique_ptr<IndirectIntegrator> make_gather_integrator(const BakeContext& b, Progress& progress,
-                                                           Report& report);
+struct GatherOperator;
+
+// Traced gather rays kept between processes (a cook's job folder, job_dir.h): the integrator
+// asks it before tracing and hands it what it traced.
+class GatherStore {
+ public:
+  virtual ~GatherStore() = default;
+  // true: `op` now holds this bake's operator, as build_gather would make it.
+  virtual bool load(GatherOperator& op, Progress& progress) = 0;
+  virtual void save(const GatherOperator& op, Progress& progress) = 0;
+};
+
+// Final gathering (gather.h): traces the gather rays of the context's texels, or loads them from
+// `store` (may be null).
+std::unique_ptr<IndirectIntegrator> make_gather_integrator(const BakeContext& b, GatherStore* store,
+                                                           Progress& progress, Report& report);
 
 }  // namespace lightpatch::cooker

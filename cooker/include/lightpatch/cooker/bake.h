@@ -58,6 +58,10 @@ struct BakeOptions {
   // solved, every light-object pair traced and kept (no reach or cone culling, no peak
   // threshold), every measured overlap correction kept.
   bool plan_effects = true;
+  // > 0: the output step (BakedMaps::output_step, irradiance) instead of the scene's own (its
+  // authored state's 99th percentile / 255, rounded down to a quarter octave). A level's step
+  // pinned keeps every job's hash through edits that move its percentile (cook_jobs.h).
+  float output_step = 0.0f;
 };
 
 // Throws CookError when the texel set's arrays disagree with its size or a light has a negative
@@ -74,6 +78,7 @@ GatherPreset gather_preset(const BakeOptions& options);
 
 struct BakePlan;
 struct Decision;
+class GatherStore;  // src/indirect/integrator.h: gather rays kept between processes (cook jobs)
 
 // One light group's maps (BakePlan::groups[group]): the unit of work of a bake.
 struct GroupBake {
@@ -89,15 +94,19 @@ struct GroupBake {
 
 class BakeSession {
  public:
-  // Plans the bake and traces what its groups share (the gather rays). Decisions of the plan go
-  // into `report`. Throws CookError on inconsistent input.
+  // Plans the bake; the first bake_group() or bake_state() traces what the groups share (the
+  // gather rays), or loads them from `store` if it has them. Decisions of the plan go into
+  // `report`. Throws CookError on inconsistent input.
   BakeSession(const Scene& scene, const Layout& layout, const TexelSet& texels,
-              const Tracer& tracer, const BakeOptions& options, Progress& progress, Report& report);
+              const Tracer& tracer, const BakeOptions& options, Progress& progress, Report& report,
+              GatherStore* store = nullptr);
   ~BakeSession();
   BakeSession(const BakeSession&) = delete;
   BakeSession& operator=(const BakeSession&) = delete;
 
   const BakePlan& plan() const;
+  // Traces (or loads) what the groups share now; the first bake otherwise does.
+  void trace_shared(Progress& progress, Report& report) const;
   float output_step() const;
   // Bakes group `group` of plan().groups. Its maps depend on the scene, options and seed only.
   GroupBake bake_group(size_t group, Progress& progress, Report& report) const;
@@ -110,6 +119,7 @@ class BakeSession {
                         FloatImage* blocks = nullptr) const;
 
   struct Impl;  // the session's state (src/bake/session.h)
+  const Impl& impl() const;
 
  private:
   std::unique_ptr<Impl> impl_;
