@@ -12,6 +12,7 @@
 #include "lightpatch/cooker/job_dir.h"
 #include "lightpatch/cooker/progress.h"
 #include "lightpatch/cooker/report.h"
+#include "limit_options.h"
 #include "verbs.h"
 
 namespace lightpatch::tool {
@@ -131,6 +132,9 @@ int verb_assemble(Args& args) {
   Progress progress(o.quiet);
   Report report;
   const std::vector<uint8_t> pack = assemble_job_dir(dir, o.threads, progress, report);
+  // The same warning as `cook` gives: the pack is byte for byte the one cook would write.
+  if (const std::string w = check_cooked_pack(pack); !w.empty())
+    std::fprintf(stderr, "lightpatch assemble: warning: %s\n", w.c_str());
   progress.begin("write", 1);
   write_file_atomic(output, pack.data(), pack.size());
   report.stage_time("write", progress.end());
