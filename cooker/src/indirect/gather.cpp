@@ -505,25 +505,24 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     op.tile_coarse[tile].push_back(c);
   }
   op.sources.assign(n_tiles, {});
+  // Marked in a flag per tile, then listed in order: sorting every ray's tile cost more than
+  // the rest of the pass.
   parallel_for(int(n_tiles), options.threads, [&](int tile) {
-    std::vector<uint32_t>& src = op.sources[size_t(tile)];
+    std::vector<uint8_t> seen(n_tiles, 0);
     for (uint32_t c : op.tile_coarse[size_t(tile)]) {
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
       for (int k = 0; k < n_rays; ++k)
-        if (hits[k] != kNoTexel) src.push_back(op.tile_of[hits[k]]);
+        if (hits[k] != kNoTexel) seen[op.tile_of[hits[k]]] = 1;
       for (uint32_t i = op.crossing_offset[c]; i < op.crossing_offset[c + 1]; ++i) {
         const Crossing& rec = op.crossings[i];
         for (uint32_t j = rec.first; j < rec.first + rec.count; ++j)
           if (op.crossing_hits[j].coarse != kNoTexel)
-            src.push_back(op.tile_of[op.crossing_hits[j].coarse]);
-      }
-      if (src.size() > 4096) {  // keep the scratch small on big tiles
-        std::sort(src.begin(), src.end());
-        src.erase(std::unique(src.begin(), src.end()), src.end());
+            seen[op.tile_of[op.crossing_hits[j].coarse]] = 1;
       }
     }
-    std::sort(src.begin(), src.end());
-    src.erase(std::unique(src.begin(), src.end()), src.end());
+    std::vector<uint32_t>& src = op.sources[size_t(tile)];
+    for (size_t t = 0; t < n_tiles; ++t)
+      if (seen[t]) src.push_back(uint32_t(t));
   });
   op.rays_traced = tracer.rays_traced() - rays0;
   return op;

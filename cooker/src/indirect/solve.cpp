@@ -11,6 +11,8 @@ namespace lightpatch::cooker {
 namespace {
 
 constexpr uint32_t kChunk = 256;  // receivers per work item
+// gather_into prefetches the rays of the receiver this far ahead.
+constexpr size_t kPrefetchAhead = 8;
 
 float max3(const glm::vec3& v) {
   return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
@@ -71,6 +73,12 @@ void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
   parallel_for(items, threads, [&](int item) {
     const size_t end = std::min(receivers.size(), size_t(item + 1) * kChunk);
     for (size_t i = size_t(item) * kChunk; i < end; ++i) {
+      // Each receiver reads a row (or a prefix of it) far from the last one: the hardware
+      // prefetcher does not see it coming, and waiting for it took half the gather's time.
+      if (i + kPrefetchAhead < end) {
+        const uint32_t* ahead = op.hit.data() + size_t(receivers[i + kPrefetchAhead]) * op.rays;
+        for (int k = 0; k < n; k += 16) __builtin_prefetch(ahead + k);  // 16 rays a cache line
+      }
       const uint32_t c = receivers[i];
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       glm::vec3 sum(0.0f);
