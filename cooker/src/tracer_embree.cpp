@@ -195,6 +195,32 @@ class EmbreeTracer final : public Tracer {
     return collect(origin, dir, tmin, tmax, kStaticMask | kObjectMask, out, max_out);
   }
 
+  // The static part as packets (one texel's shadow rays leave one point), then one object query
+  // for each unblocked ray that crosses an object's bounds. A ray counts once, as in
+  // shadow_query().
+  void shadow_query_many(const Ray* rays, int n, int* counts, int* objects,
+                         int max_out) const override {
+    constexpr int kChunk = 64;
+    uint8_t blocked[kChunk];
+    for (int first = 0; first < n; first += kChunk) {
+      const int m = std::min(kChunk, n - first);
+      occluded_batch(rays + first, m, blocked, kStaticMask);
+      for (int i = 0; i < m; ++i) {
+        const Ray& r = rays[first + i];
+        int& count = counts[first + i];
+        if (blocked[i]) {
+          count = -1;
+        } else if (has_objects_ && max_out > 0 && r.tmax > r.tmin &&
+                   crosses_any_object(r.origin, r.dir, r.tmin, r.tmax)) {
+          int* out = objects + size_t(first + i) * size_t(max_out);
+          count = std::max(0, collect(r.origin, r.dir, r.tmin, r.tmax, kObjectMask, out, max_out));
+        } else {
+          count = 0;
+        }
+      }
+    }
+  }
+
   void intersect_many(const Ray* rays, int n, Hit* hits, bool with_objects) const override {
     const unsigned accept = with_objects ? (kStaticMask | kObjectMask) : kStaticMask;
     if (packet_width_ == 16) return intersect_packets<16>(rays, n, hits, accept);
@@ -210,9 +236,11 @@ class EmbreeTracer final : public Tracer {
     occluded_batch(rays, n, blocked, kStaticMask | kObjectMask);
   }
 
+  // A batch of a few rays (a point light's 4 texel samples) takes the narrowest packet that holds
+  // it: a wide packet with idle lanes costs about as much as a full one.
   void occluded_batch(const Ray* rays, int n, uint8_t* blocked, unsigned accept) const {
-    if (packet_width_ == 16) return occluded_packets<16>(rays, n, blocked, accept);
-    if (packet_width_ == 8) return occluded_packets<8>(rays, n, blocked, accept);
+    if (packet_width_ == 16 && n > 8) return occluded_packets<16>(rays, n, blocked, accept);
+    if (packet_width_ >= 8 && n > 4) return occluded_packets<8>(rays, n, blocked, accept);
     occluded_packets<4>(rays, n, blocked, accept);
   }
 

@@ -2,6 +2,7 @@
 // objects are found in one traversal, occluders are double-sided, epsilon scales with the scene.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -158,6 +159,29 @@ TEST(Tracer, BatchQueriesMatchSingleRays) {
     if (n == kRays) {
       EXPECT_GT(count, kRays / 4);
       EXPECT_LT(count, kRays * 3 / 4);  // both answers occur
+    }
+    // shadow_query_many: shadow_query's answer and objects (in any order) per ray, counted alike.
+    constexpr int kMax = 2;
+    std::vector<int> counts(size_t(n) + 1, 7), objects(size_t(n) * kMax + 1, 7);
+    const uint64_t before = tr->rays_traced();
+    tr->shadow_query_many(rays.data(), n, counts.data(), objects.data(), kMax);
+    const uint64_t counted = tr->rays_traced() - before;
+    EXPECT_EQ(counts[size_t(n)], 7);
+    EXPECT_EQ(objects[size_t(n) * kMax], 7);
+    int crossing = 0;
+    for (int i = 0; i < n; ++i) {
+      const Ray& r = rays[size_t(i)];
+      int one[kMax] = {-1, -1};
+      const int k = tr->shadow_query(r.origin, r.dir, r.tmin, r.tmax, one, kMax);
+      ASSERT_EQ(counts[size_t(i)], k) << "ray " << i;
+      const int* many = objects.data() + size_t(i) * kMax;
+      for (int j = 0; j < k; ++j)
+        EXPECT_NE(std::find(many, many + k, one[j]), many + k) << "ray " << i;
+      crossing += k > 0 ? 1 : 0;
+    }
+    EXPECT_EQ(counted, tr->rays_traced() - before - counted);  // as many as the singles counted
+    if (n == kRays) {
+      EXPECT_GT(crossing, 10);  // rays that cross objects were compared
     }
   }
 }

@@ -23,6 +23,18 @@ FloatImage SparseMap::dense() const {
   return m;
 }
 
+void SampleRays::trace(const Tracer& tracer, const std::vector<LightSample>& samples,
+                       int max_objects) {
+  const size_t n = samples.size();
+  rays.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    rays[i] = {samples[i].origin, samples[i].tmin, samples[i].dir, samples[i].tmax};
+  counts.resize(n);
+  stride = size_t(std::max(0, max_objects));
+  objects.resize(std::max<size_t>(1, n * stride));
+  tracer.shadow_query_many(rays.data(), int(n), counts.data(), objects.data(), max_objects);
+}
+
 float peak_of(const FloatImage& map, const TexelSet& texels) {
   float peak = 0.0f;
   const size_t ch = size_t(map.channels);
@@ -47,7 +59,7 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
   const size_t nc = cand.sets.size();
   parallel_for(h, b.threads, [&](int y) {
     std::vector<LightSample> samples;
-    std::vector<int> hit(static_cast<size_t>(std::max(1, max_objects)));
+    SampleRays batch;
     std::vector<int> slots;
     std::vector<glm::vec3> s_acc(nc);
     std::vector<std::pair<std::pair<int, int>, glm::vec3>> p_acc;  // this texel's pair terms
@@ -59,11 +71,9 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
       glm::vec3 c_acc(0.0f);
       bool any = false;  // some shadow accumulator touched
       p_acc.clear();
-      // A segment carrying `e`: static occlusion, then the candidates it crosses.
-      auto segment = [&](const LightSample& s, const glm::vec3& e) {
-        const int n =
-            nc == 0 ? (tracer.occluded_static(s.origin, s.dir, s.tmin, s.tmax) ? -1 : 0)
-                    : tracer.shadow_query(s.origin, s.dir, s.tmin, s.tmax, hit.data(), max_objects);
+      // A segment carrying `e` and its answer: blocked by static geometry (n < 0), or crossing
+      // the n candidates `hit`.
+      auto segment = [&](int n, const int* hit, const glm::vec3& e) {
         if (n < 0) return;
         c_acc += e;
         slots.clear();
@@ -89,22 +99,29 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
           (slots.size() == 2 ? doubly : triply) += max3(e);
         }
       };
+      // One light's samples of this texel, traced together; `scale` gives each its energy.
+      auto trace = [&](const glm::vec3& scale, bool per_channel) {
+        batch.trace(tracer, samples, nc == 0 ? 0 : max_objects);
+        for (size_t i = 0; i < samples.size(); ++i) {
+          const glm::vec3 e = per_channel ? samples[i].irradiance : scale * samples[i].irradiance.x;
+          segment(batch.counts[i], batch.objects_of(i), e);
+        }
+      };
       if (light < 0) {
         for (size_t l = 0; l < scene.lights.size(); ++l) {
           const Light& sl = scene.lights[l];
           if (sl.semi_dynamic) continue;
           samples.clear();
           b.light_samples(static_cast<int>(l), t, samples);
-          const glm::vec3 radiant = sl.color * sl.intensity;
-          for (const LightSample& s : samples) segment(s, radiant * s.irradiance.x);
+          trace(sl.color * sl.intensity, false);
         }
         samples.clear();
         b.emissive_samples(t, samples);
-        for (const LightSample& s : samples) segment(s, s.irradiance);
+        trace(glm::vec3(1.0f), true);
       } else {
         samples.clear();
         b.light_samples(light, t, samples);
-        for (const LightSample& s : samples) segment(s, glm::vec3(s.irradiance.x));
+        trace(glm::vec3(1.0f), false);
       }
       for (int ch = 0; ch < channels; ++ch) gm.map.at(x, y, ch) = c_acc[ch];
       for (const auto& [key, e] : p_acc) row_pairs.push_back({key, {x, e}});

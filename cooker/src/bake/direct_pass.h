@@ -62,6 +62,21 @@ struct DirectPass {
   double triply_blocked = 0.0;  // ... by 3 or more
 };
 
+// Shadow samples of one texel and one light traced as a batch (Tracer::shadow_query_many): they
+// leave one small patch, so Embree traces them as packets. Buffers are reused from call to call.
+struct SampleRays {
+  void trace(const Tracer& tracer, const std::vector<LightSample>& samples, int max_objects);
+  // Sample i's answer: -1 blocked by static geometry, else how many objects it crosses,
+  // listed at objects_of(i).
+  std::vector<int> counts;
+  const int* objects_of(size_t i) const { return objects.data() + i * stride; }
+
+ private:
+  std::vector<Ray> rays;
+  std::vector<int> objects;
+  size_t stride = 0;
+};
+
 // light < 0: the static group (every static light at its authored colour and intensity, and the
 // emissive surfaces); otherwise scene light `light` at intensity 1, white. `channels`: 1 or 3.
 DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand, int channels,

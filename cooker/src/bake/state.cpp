@@ -3,6 +3,7 @@
 // light (the integrator's state solve), so a single-object state equals B + sum f_l (C_l - S_ol).
 #include <mutex>
 
+#include "bake/direct_pass.h"
 #include "bake/session.h"
 #include "indirect/integrator.h"
 #include "worker_pool.h"
@@ -24,12 +25,13 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress, R
   progress.begin("bake state", static_cast<uint64_t>(h));
   parallel_for(h, b.threads, [&](int y) {
     std::vector<LightSample> samples;
-    std::vector<int> hit(static_cast<size_t>(std::max(1, max_objects)));
-    auto visible_through = [&](const LightSample& s) {
-      const int n = b.tracer.shadow_query(s.origin, s.dir, s.tmin, s.tmax, hit.data(), max_objects);
+    SampleRays batch;  // traced as the groups' direct passes trace them
+    auto unblocked = [&](size_t i) {
+      const int n = batch.counts[i];
       if (n < 0) return false;
+      const int* hit = batch.objects_of(i);
       for (int j = 0; j < n; ++j)
-        if (visible[static_cast<size_t>(hit[static_cast<size_t>(j)])]) return false;
+        if (visible[static_cast<size_t>(hit[j])]) return false;
       return true;
     };
     for (int x = 0; x < w; ++x) {
@@ -40,15 +42,17 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress, R
         if (max3(radiant[li]) <= 0.0f) continue;
         samples.clear();
         b.light_samples(static_cast<int>(li), t, samples);
+        batch.trace(b.tracer, samples, max_objects);
         float sum = 0.0f;
-        for (const LightSample& s : samples)
-          if (visible_through(s)) sum += s.irradiance.x;
+        for (size_t i = 0; i < samples.size(); ++i)
+          if (unblocked(i)) sum += samples[i].irradiance.x;
         e += radiant[li] * sum;
       }
       samples.clear();
       b.emissive_samples(t, samples);
-      for (const LightSample& s : samples)
-        if (visible_through(s)) e += s.irradiance;
+      batch.trace(b.tracer, samples, max_objects);
+      for (size_t i = 0; i < samples.size(); ++i)
+        if (unblocked(i)) e += samples[i].irradiance;
       for (int c = 0; c < 3; ++c) out.at(x, y, c) = e[c];
     }
     progress.advance();

@@ -63,24 +63,47 @@ glm::vec3 cosine_dir(const glm::vec3& n, float u, float v) {
   return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
 }
 
-// The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
-// same side of the same mesh; otherwise, of the texels within two of it that do, the one whose
-// sample point lies nearest the hit; kNoTexel if none.
-uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels, const Hit& h,
-                      const glm::vec3& point) {
+// What texel_of_hit reads of the texel under a hit, in one place: with the texel set's arrays
+// apart, every gather ray paid a cache miss in each.
+struct TexelSurface {
+  int32_t mesh = -1;  // -1: not valid
+  glm::vec3 normal{0.0f};
+};
+
+std::vector<TexelSurface> texel_surfaces(const TexelSet& texels) {
+  std::vector<TexelSurface> out(texels.valid.size());
+  for (size_t t = 0; t < out.size(); ++t)
+    if (texels.valid[t]) out[t] = {texels.mesh[t], texels.normal[t]};
+  return out;
+}
+
+// The texel under a hit's light-map UV, kNoTexel for a mesh outside the light map.
+uint32_t texel_under(const Layout& layout, const TexelSet& texels, const Hit& h) {
   const MeshLayout& ml = layout.meshes[size_t(h.mesh)];
   const size_t t3 = size_t(h.triangle) * 3;
-  if (t3 + 2 >= ml.indices.size()) return kNoTexel;  // a mesh outside the light map
+  if (t3 + 2 >= ml.indices.size()) return kNoTexel;
   const glm::vec2 uv = (1.0f - h.u - h.v) * ml.uv[ml.indices[t3]] +
                        h.u * ml.uv[ml.indices[t3 + 1]] + h.v * ml.uv[ml.indices[t3 + 2]];
   const float fx = uv.x * float(texels.width), fy = uv.y * float(texels.height);
   const int x0 = std::clamp(int(std::floor(fx)), 0, texels.width - 1);
   const int y0 = std::clamp(int(std::floor(fy)), 0, texels.height - 1);
+  return uint32_t(texels.index(x0, y0));
+}
+
+// The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
+// same side of the same mesh; otherwise, of the texels within two of it that do, the one whose
+// sample point lies nearest the hit; kNoTexel if none. `surfaces`: texel_surfaces(texels).
+uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels,
+                      const std::vector<TexelSurface>& surfaces, const Hit& h,
+                      const glm::vec3& point) {
+  const uint32_t under = texel_under(layout, texels, h);
+  if (under == kNoTexel) return kNoTexel;
+  const int x0 = int(under % uint32_t(texels.width)), y0 = int(under / uint32_t(texels.width));
   // The texel must sample this side of this surface: a chart of the same mesh beside it in the
   // page (the other face of a wall slab) must not lend it its light.
   auto same_surface = [&](size_t t) {
-    return texels.valid[t] && texels.mesh[t] == h.mesh &&
-           glm::dot(texels.normal[t], h.geometric_normal) > kSameSurfaceCos - 0.2f;
+    return surfaces[t].mesh == h.mesh &&
+           glm::dot(surfaces[t].normal, h.geometric_normal) > kSameSurfaceCos - 0.2f;
   };
   const size_t t0 = texels.index(x0, y0);
   if (same_surface(t0)) return uint32_t(t0);
@@ -320,13 +343,17 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   std::vector<std::vector<uint32_t>> row_counts(size_t(g.height));
   // Texel sets made without a layout (tests) find hits by position.
   std::unique_ptr<TexelLocator> locator;
-  if (layout.meshes.size() != scene.meshes.size()) locator = std::make_unique<TexelLocator>(texels);
+  std::vector<TexelSurface> surfaces;
+  if (layout.meshes.size() != scene.meshes.size())
+    locator = std::make_unique<TexelLocator>(texels);
+  else
+    surfaces = texel_surfaces(texels);
   // While tracing, hits are fine texels (or kBackFace); resolved to coarse texels after.
   auto to_fine = [&](const Hit& h, const glm::vec3& origin, const glm::vec3& dir) {
     if (glm::dot(dir, h.geometric_normal) > 0.0f) return kBackFace;
     const glm::vec3 point = origin + dir * h.t;
     return locator ? locator->find(point, h.geometric_normal)
-                   : texel_of_hit(layout, texels, h, point);
+                   : texel_of_hit(layout, texels, surfaces, h, point);
   };
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
@@ -350,6 +377,15 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
                            extent};
       }
       tracer.intersect_many(rays.data(), n_rays, first.data(), true);
+      // The texels under the hits are far apart in memory: fetched for all rays at once, their
+      // cache misses overlap instead of stalling ray after ray.
+      if (!locator) {
+        for (int k = 0; k < n_rays; ++k) {
+          if (!first[size_t(k)].hit) continue;
+          const uint32_t under = texel_under(layout, texels, first[size_t(k)]);
+          if (under != kNoTexel) __builtin_prefetch(&surfaces[under]);
+        }
+      }
       for (int k = 0; k < n_rays; ++k) {
         const glm::vec3 origin = rays[size_t(k)].origin, dir = rays[size_t(k)].dir;
         float tmin = eps;

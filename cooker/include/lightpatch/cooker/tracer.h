@@ -4,6 +4,8 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 
@@ -54,6 +56,16 @@ class Tracer {
                            int* out, int max_out) const {
     if (occluded_static(origin, dir, tmin, tmax)) return -1;
     return blocking_objects(origin, dir, tmin, tmax, out, max_out);
+  }
+  // shadow_query() for each of n rays (n >= 0): counts[i] is its answer, its objects at
+  // objects[i * max_out, ...). Rays are counted as shadow_query() counts them. The default loops;
+  // tracers trace the static part as packets.
+  virtual void shadow_query_many(const Ray* rays, int n, int* counts, int* objects,
+                                 int max_out) const {
+    for (int i = 0; i < n; ++i) {
+      counts[i] = shadow_query(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax,
+                               objects + size_t(i) * size_t(std::max(0, max_out)), max_out);
+    }
   }
   // Batch queries: the same answers as intersect() / occluded_static() for each ray, in fewer
   // traversal calls (Embree packets). hits[i] / blocked[i] (1 = blocked) answer rays[i]; n >= 0.
