@@ -92,11 +92,10 @@ uint32_t texel_under(const Layout& layout, const TexelSet& texels, const Hit& h)
 
 // The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
 // same side of the same mesh; otherwise, of the texels within two of it that do, the one whose
-// sample point lies nearest the hit; kNoTexel if none. `surfaces`: texel_surfaces(texels).
-uint32_t texel_of_hit(const Layout& layout, const TexelSet& texels,
-                      const std::vector<TexelSurface>& surfaces, const Hit& h,
-                      const glm::vec3& point) {
-  const uint32_t under = texel_under(layout, texels, h);
+// sample point lies nearest the hit; kNoTexel if none. `surfaces`: texel_surfaces(texels);
+// `under`: texel_under() of the hit.
+uint32_t texel_of_hit(const TexelSet& texels, const std::vector<TexelSurface>& surfaces,
+                      const Hit& h, const glm::vec3& point, uint32_t under) {
   if (under == kNoTexel) return kNoTexel;
   const int x0 = int(under % uint32_t(texels.width)), y0 = int(under / uint32_t(texels.width));
   // The texel must sample this side of this surface: a chart of the same mesh beside it in the
@@ -349,11 +348,11 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   else
     surfaces = texel_surfaces(texels);
   // While tracing, hits are fine texels (or kBackFace); resolved to coarse texels after.
-  auto to_fine = [&](const Hit& h, const glm::vec3& origin, const glm::vec3& dir) {
+  auto to_fine = [&](const Hit& h, const glm::vec3& origin, const glm::vec3& dir, uint32_t under) {
     if (glm::dot(dir, h.geometric_normal) > 0.0f) return kBackFace;
     const glm::vec3 point = origin + dir * h.t;
     return locator ? locator->find(point, h.geometric_normal)
-                   : texel_of_hit(layout, texels, surfaces, h, point);
+                   : texel_of_hit(texels, surfaces, h, point, under);
   };
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
@@ -361,6 +360,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<uint32_t>& counts = row_counts[size_t(by)];
     std::vector<Ray> rays(static_cast<size_t>(n_rays));
     std::vector<Hit> first(static_cast<size_t>(n_rays));
+    std::vector<uint32_t> under(static_cast<size_t>(n_rays), kNoTexel);
     for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
       const uint64_t hsh = sample_hash(options.seed, c, 0x6761746865ull, 0);
@@ -381,9 +381,9 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       // cache misses overlap instead of stalling ray after ray.
       if (!locator) {
         for (int k = 0; k < n_rays; ++k) {
-          if (!first[size_t(k)].hit) continue;
-          const uint32_t under = texel_under(layout, texels, first[size_t(k)]);
-          if (under != kNoTexel) __builtin_prefetch(&surfaces[under]);
+          under[size_t(k)] =
+              first[size_t(k)].hit ? texel_under(layout, texels, first[size_t(k)]) : kNoTexel;
+          if (under[size_t(k)] != kNoTexel) __builtin_prefetch(&surfaces[under[size_t(k)]]);
         }
       }
       for (int k = 0; k < n_rays; ++k) {
@@ -396,16 +396,19 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
           const Hit h =
               guard == 0 ? first[size_t(k)] : tracer.intersect(origin, dir, tmin, extent, true);
           if (!h.hit) break;
+          const uint32_t u = guard == 0 ? under[size_t(k)]
+                             : locator  ? kNoTexel
+                                        : texel_under(layout, texels, h);
           const int object = scene.meshes[size_t(h.mesh)].object;
           if (object < 0) {
-            static_hit = to_fine(h, origin, dir);
+            static_hit = to_fine(h, origin, dir, u);
             break;
           }
           bool seen = false;
           for (uint32_t i = rec.first; i < rec.first + rec.count; ++i)
             seen |= ch[i].object == object;
           if (!seen && rec.count < uint32_t(kMaxCrossed)) {
-            ch.push_back({object, to_fine(h, origin, dir)});
+            ch.push_back({object, to_fine(h, origin, dir, u)});
             ++rec.count;
           }
           tmin = h.t + eps;
