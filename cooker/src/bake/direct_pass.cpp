@@ -38,8 +38,9 @@ void SampleRays::trace(const Tracer& tracer, const std::vector<LightSample>& sam
 float peak_of(const FloatImage& map, const TexelSet& texels) {
   float peak = 0.0f;
   const size_t ch = size_t(map.channels);
-  for (size_t i = 0; i < map.data.size(); ++i) {
-    if (texels.valid[i / ch]) peak = std::max(peak, std::fabs(map.data[i]));
+  for (size_t t = 0; t < map.data.size() / ch; ++t) {
+    if (!texels.valid[t]) continue;
+    for (size_t c = 0; c < ch; ++c) peak = std::max(peak, std::fabs(map.data[t * ch + c]));
   }
   return peak;
 }
