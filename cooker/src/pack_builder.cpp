@@ -317,10 +317,9 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     }
   });
   // One choice per light group (the base map with the static shadows; a light's C_l with its
-  // S_ol and pair corrections): the runtime clamps each presented map at zero, and a state's
-  // light-map part and indirect part are each non-negative only if every map of a light is
-  // split alike (the indirect part then is the state's bounce light, the light-map part its
-  // direct light).
+  // S_ol and pair corrections), so that a state's indirect part is the bounce light of the groups
+  // that split, whole. The light-map part may be negative where the indirect map's filter blends
+  // across a crease; the runtime presents both maps signed and a game clamps L + I.
   std::map<int, uint64_t> group_plain, group_split;
   for (size_t i = 0; i < jobs.size(); ++i) {
     const bool splittable = can_split && jobs[i].indirect && !jobs[i].indirect->data.empty();

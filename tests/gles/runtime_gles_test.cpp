@@ -94,7 +94,7 @@ class Gles : public ::testing::Test {
   // The presented map of the wanted state and its magnitudes.
   std::vector<double> wanted(std::vector<double>* magnitude) {
     return presented(
-        reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), magnitude));
+        pack_, reference_map(pack_, testing::wanted_state(runtime_.planner(), pack_), magnitude));
   }
 
   platform::EglContext context_;
@@ -336,7 +336,7 @@ TEST_F(Gles, BudgetNeverExceededAndNoPartialStateSampled) {
     // What the game samples is exactly the presented state: never half a change or a rebuild.
     std::vector<double> magnitude;
     const auto want = presented(
-        reference_map(pack_, testing::shown_state(runtime_.planner(), pack_), &magnitude));
+        pack_, reference_map(pack_, testing::shown_state(runtime_.planner(), pack_), &magnitude));
     ASSERT_LE(worst(read(), want, magnitude, 1.0, s.error_bound), 1.0) << "frame " << frame;
   }
   EXPECT_GT(presents, 1u);

@@ -76,7 +76,8 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
       incremental |= !cpu.stats().rebuilt;
       if (i % 250 != 249) continue;
       // Each presented map, and what a game samples: L + I magnified by the contract's formula.
-      const std::vector<double> maps = testing::presented(reference_map(pack, ref_of(state, pack)));
+      const std::vector<double> maps =
+          testing::presented(pack, reference_map(pack, ref_of(state, pack)));
       for (size_t t = 0; t < maps.size(); ++t) {
         ASSERT_NEAR(cpu.presented_maps()[t], maps[t], 1e-4 * (1.0 + std::fabs(maps[t])))
             << "map-set texel " << t / 3;

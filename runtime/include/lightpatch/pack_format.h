@@ -46,6 +46,9 @@
 // indirect-texel coordinates ((x + 0.5) / s - 0.5, (y + 0.5) / s - 0.5). The cooker lays charts
 // out on s x s blocks with a ring of blocks of their own, so that interpolation never mixes two
 // charts; the light map holds what the indirect map cannot (direct light, sharp bounce detail).
+// The bilinear filter still blends across a crease or a contact inside a chart (a wall and the
+// floor it is unwrapped with), so the light map may be negative there: it holds the map less the
+// magnified indirect map. Neither map is clamped on its own; a game lights with max(L + I, 0).
 #pragma once
 
 #include <cstddef>

@@ -408,6 +408,7 @@ Status Runtime::create_programs(Error* error) {
   // The float accumulator holds irradiance; the half one holds it scaled already.
   glUniform1f(glGetUniformLocation(present_program_, "u_scale"),
               path_ == RecomposePath::kGpuFloat ? inverse_scale_ : 1.0f);
+  glUniform1i(glGetUniformLocation(present_program_, "u_signed"), pack_.presents_signed() ? 1 : 0);
   glUseProgram(0);
   return Status::kOk;
 }
