@@ -78,10 +78,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                     std::to_string(layout.height) + " out of range");
   }
   if (options.max_atlas_size < kMinAtlasSize || options.max_atlas_size > int(kMaxAtlasSize) ||
-      (options.max_atlas_size & (options.max_atlas_size - 1)) != 0) {
+      options.max_atlas_size % int(kAtlasAlign) != 0) {
     throw CookError("maximum atlas size " + std::to_string(options.max_atlas_size) +
-                    " must be a power of two in " + std::to_string(kMinAtlasSize) + ".." +
-                    std::to_string(kMaxAtlasSize));
+                    " must be a multiple of " + std::to_string(kAtlasAlign) + " in " +
+                    std::to_string(kMinAtlasSize) + ".." + std::to_string(kMaxAtlasSize));
   }
   if (!std::isfinite(maps.output_step) || maps.output_step < 0.0f) {
     throw CookError("output step must be finite and >= 0");
@@ -120,8 +120,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     light_threshold[i] = significance(maps.contribution[i], half_step / authored[i]);
   const float base_threshold = significance(maps.base, half_step);
   // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
-  // those corners only; a tile also never exceeds an atlas (less its gutters).
-  const int max_dim = std::min(options.max_atlas_size - 2, std::max(options.tile_size, 4));
+  // those corners only; a tile also never exceeds an atlas.
+  const int max_dim = std::min(options.max_atlas_size, std::max(options.tile_size, 4));
   std::vector<MapJob> jobs;
   {
     MapJob j;
@@ -260,7 +260,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<ColourDecision> colour(jobs.size());
   struct SplitDecision {
     bool split = false;
-    uint64_t plain = 0, detail = 0, indirect = 0;  // atlas channel-texels (gutters included)
+    uint64_t plain = 0, detail = 0, indirect = 0;  // atlas channel-texels
   };
   std::vector<SplitDecision> split(jobs.size());
   std::vector<std::vector<SourcePatch>> split_patches(jobs.size());  // light-map + indirect parts
@@ -288,8 +288,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     };
     auto cost = [](const std::vector<SourcePatch>& v) {
       uint64_t n = 0;
-      for (const SourcePatch& p : v)
-        n += uint64_t(p.dest.w + 2) * uint64_t(p.dest.h + 2) * p.channels;
+      for (const SourcePatch& p : v) n += uint64_t(p.dest.w) * uint64_t(p.dest.h) * p.channels;
       return n;
     };
     std::vector<SourcePatch>& plain = per_job[size_t(i)];
@@ -330,8 +329,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
   for (size_t i = 0; i < jobs.size(); ++i) {
     const int g = jobs[i].prototype.light;
-    const bool split_group =
-        can_split && (options.always_split || group_split[g] < group_plain[g]);
+    const bool split_group = can_split && (options.always_split || group_split[g] < group_plain[g]);
     if (!split_group || !jobs[i].indirect || jobs[i].indirect->data.empty()) {
       per_job_q[i].clear();
       continue;
@@ -420,15 +418,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     const QuantizedPatch& q = quantized[i];
     const Placement& pl = atlas_layout.placements[i];
     PackContents::Atlas& atlas = c.atlases[size_t(pl.atlas)];
-    // Patch texels and a one-texel gutter replicating the edge texels.
-    for (int y = -1; y <= p.dest.h; ++y) {
-      const int sy = std::clamp(y, 0, p.dest.h - 1);
-      for (int x = -1; x <= p.dest.w; ++x) {
-        const int sx = std::clamp(x, 0, p.dest.w - 1);
+    // The patch texels only: the runtime never reads outside a patch's rectangle.
+    for (int y = 0; y < p.dest.h; ++y) {
+      for (int x = 0; x < p.dest.w; ++x) {
         uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 +
                                    size_t(pl.channel)];
         for (int ch = 0; ch < p.channels; ++ch) {
-          dst[ch] = q.codes[(size_t(sy) * p.dest.w + size_t(sx)) * size_t(p.channels) + size_t(ch)];
+          dst[ch] = q.codes[(size_t(y) * p.dest.w + size_t(x)) * size_t(p.channels) + size_t(ch)];
         }
       }
     }
@@ -548,7 +544,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         "each map is stored either as light-map patches only, or as the means of its s x s texel "
         "blocks (indirect-map patches) plus light-map patches of what their bilinear "
         "magnification leaves out (taken against the quantized block means), whichever takes "
-        "fewer atlas channel-texels, gutters included";
+        "fewer atlas channel-texels";
     int n_split = 0;
     uint64_t plain = 0, stored = 0;
     nlohmann::json per_map = nlohmann::json::array();

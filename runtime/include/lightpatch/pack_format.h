@@ -1,4 +1,4 @@
-// lightpatch pack format, version 2: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 3: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -55,11 +55,14 @@ namespace lightpatch::pack {
 
 constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 'L','P','K','1'
 // Version 2: MeshRecord grew to 64 bytes with flags and each mesh instance's light-map scale and
-// offset (kMeshFlagTexcoord1).
-constexpr uint32_t kVersion = 2;
+// offset (kMeshFlagTexcoord1). Version 3: atlas sides are multiples of kAtlasAlign, no longer
+// powers of two (a version 2 reader would call such a pack corrupt), and patches touch in the
+// atlas (no gutter). A reader accepts its own version only.
+constexpr uint32_t kVersion = 3;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
+constexpr uint32_t kAtlasAlign = 4;  // atlas sides are multiples of this (4x4 compression blocks)
 constexpr uint32_t kMaxLightmapSize = 16384;
 
 enum SectionType : uint32_t {
@@ -200,9 +203,13 @@ static_assert(offsetof(PatchRecord, scale) == 16);
 static_assert(offsetof(PatchRecord, flags) == 20);
 static_assert(offsetof(PatchRecord, group) == 22);
 
+// An atlas: any size whose sides are multiples of kAtlasAlign (GLES 3.0 textures need not be
+// powers of two; the runtime reads them with texelFetch only). Patches may touch: a texel belongs
+// to at most one patch per channel, and a reader reads a patch's own rectangle only, so texels no
+// patch covers (zero as the cooker writes them) never reach a map.
 struct AtlasRecord {
-  uint32_t width;        // texels, power of two, <= kMaxAtlasSize
-  uint32_t height;       // texels, power of two, <= kMaxAtlasSize
+  uint32_t width;        // texels, a multiple of kAtlasAlign in kAtlasAlign..kMaxAtlasSize
+  uint32_t height;       // texels, a multiple of kAtlasAlign in kAtlasAlign..kMaxAtlasSize
   uint64_t data_offset;  // from file start, inside kAtlasData, multiple of kSectionAlignment
                          // width*height*4 bytes of RGBA8, rows top to bottom, tightly packed
 };

@@ -17,9 +17,9 @@ namespace lightpatch::cooker {
 enum class EncodingPolicy { kAuto, kLinear, kSquare };
 
 struct PackOptions {
-  int max_atlas_size = 2048;  // power of two
-  // Largest patch side (texels). Smaller tiles skip more empty light map but add gutters and
-  // records; 32 gave the fewest atlas bytes per scene in our measurements (README, Numbers).
+  int max_atlas_size = 2048;  // a multiple of pack::kAtlasAlign
+  // Largest patch side (texels). Smaller tiles skip more empty light map but add records; 32 gave
+  // the fewest atlas bytes per scene in our measurements (README, Numbers).
   int tile_size = 32;
   EncodingPolicy encoding = EncodingPolicy::kAuto;
   // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step
