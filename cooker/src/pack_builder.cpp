@@ -8,6 +8,7 @@
 
 #include "atlas_packer.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/group_rules.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
 #include "map_split.h"
@@ -46,6 +47,57 @@ float significance(const FloatImage& map, float at_authored) {
     if (std::isfinite(v)) peak = std::max(peak, v);
   }
   return peak > 0.0f ? std::min(at_authored, 0.5f * peak / 255.0f) : at_authored;
+}
+
+// A patch as stored: source patch `source` whole (destination -1), or its channel `destination`
+// alone as a 1-channel patch that draws into that map channel only.
+struct StoredPatch {
+  size_t source = 0;
+  int destination = -1;
+};
+
+std::vector<StoredPatch> whole_patches(const std::vector<SourcePatch>& patches) {
+  std::vector<StoredPatch> out(patches.size());
+  for (size_t i = 0; i < patches.size(); ++i) out[i].source = i;
+  return out;
+}
+
+// A 3-channel patch takes channels 0-2 of its atlas texels; only 1-channel patches can use
+// channel 3, so a pack of mostly tinted patches leaves a quarter of its atlases empty. Tinted
+// patches of the groups without a light (B and the static shadows: drawn on a full rebuild, and
+// the static shadows on their object's toggle, never on a light change) are stored as three
+// 1-channel patches, largest first, while the 1-channel channel-texels still fit the alpha plane
+// under the 3-channel patches left. Each split texel costs two more texels drawn when its group
+// is drawn; the decoded values are the same bytes, so the recomposition is too.
+std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches) {
+  int64_t rgb = 0, grey = 0;  // texels of 3-channel patches, channel-texels of 1-channel ones
+  std::vector<size_t> candidates;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const int64_t t = int64_t(patches[i].dest.w) * patches[i].dest.h;
+    (patches[i].channels == 3 ? rgb : grey) += t;
+    if (patches[i].channels == 3 && !group_has_light(patches[i].kind)) candidates.push_back(i);
+  }
+  std::stable_sort(candidates.begin(), candidates.end(), [&](size_t a, size_t b) {
+    return int64_t(patches[a].dest.w) * patches[a].dest.h >
+           int64_t(patches[b].dest.w) * patches[b].dest.h;
+  });
+  std::vector<uint8_t> split(patches.size(), 0);
+  for (size_t i : candidates) {
+    const int64_t t = int64_t(patches[i].dest.w) * patches[i].dest.h;
+    if (grey + 3 * t > rgb - t) continue;  // a smaller one may still fit
+    grey += 3 * t;
+    rgb -= t;
+    split[i] = 1;
+  }
+  std::vector<StoredPatch> out;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    if (!split[i]) {
+      out.push_back({i, -1});
+      continue;
+    }
+    for (int c = 0; c < 3; ++c) out.push_back({i, c});
+  }
+  return out;
 }
 
 nlohmann::json error_json(const EncodingError& e) {
@@ -386,9 +438,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     c.objects.push_back(r);
   }
 
+  // The stored patches: each source patch, or its three channels apart (see split_for_alpha).
+  const std::vector<StoredPatch> stored =
+      options.fill_alpha ? split_for_alpha(patches) : whole_patches(patches);
+
   // Groups: consecutive patches with one owner (jobs are already in group order).
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const SourcePatch& p = patches[i];
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
     const uint16_t light = p.light < 0 ? kNone16 : uint16_t(p.light);
     const uint16_t object = p.object < 0 ? kNone16 : uint16_t(p.object);
     const uint16_t object_b = p.object_b < 0 ? kNone16 : uint16_t(p.object_b);
@@ -401,9 +457,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   if (c.groups.size() > 0x10000u) throw CookError("more than 65536 patch groups");
 
   // Atlases.
-  std::vector<PackItem> items(patches.size());
-  for (size_t i = 0; i < patches.size(); ++i) {
-    items[i] = PackItem{patches[i].dest.w, patches[i].dest.h, patches[i].channels};
+  std::vector<PackItem> items(stored.size());
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
+    items[i] = PackItem{p.dest.w, p.dest.h, stored[i].destination >= 0 ? 1 : p.channels};
   }
   const AtlasLayout atlas_layout = pack_atlases(items, options.max_atlas_size);
   for (const AtlasSize& a : atlas_layout.atlases) {
@@ -413,19 +470,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     atlas.rgba.assign(size_t(a.width) * a.height * 4, 0);
     c.atlases.push_back(std::move(atlas));
   }
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const SourcePatch& p = patches[i];
-    const QuantizedPatch& q = quantized[i];
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
+    const QuantizedPatch& q = quantized[stored[i].source];
     const Placement& pl = atlas_layout.placements[i];
+    const int destination = stored[i].destination;
+    // Channels of the source patch stored: all, or the destination's.
+    const int first = std::max(destination, 0), count = destination >= 0 ? 1 : p.channels;
     PackContents::Atlas& atlas = c.atlases[size_t(pl.atlas)];
     // The patch texels only: the runtime never reads outside a patch's rectangle.
     for (int y = 0; y < p.dest.h; ++y) {
       for (int x = 0; x < p.dest.w; ++x) {
         uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 +
                                    size_t(pl.channel)];
-        for (int ch = 0; ch < p.channels; ++ch) {
-          dst[ch] = q.codes[(size_t(y) * p.dest.w + size_t(x)) * size_t(p.channels) + size_t(ch)];
-        }
+        const uint8_t* src =
+            &q.codes[(size_t(y) * p.dest.w + size_t(x)) * size_t(p.channels) + size_t(first)];
+        for (int ch = 0; ch < count; ++ch) dst[ch] = src[ch];
       }
     }
     PatchRecord r{};
@@ -437,10 +497,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     r.dest_y = uint16_t(p.dest.y);
     r.atlas = uint8_t(pl.atlas);
     r.channel = uint8_t(pl.channel);
-    r.channel_count = uint8_t(p.channels);
+    r.channel_count = uint8_t(count);
     r.encoding = q.encoding;
     r.scale = q.scale;
-    r.flags = p.negative ? kFlagNegative : 0;
+    r.flags = uint8_t((p.negative ? kFlagNegative : 0) |
+                      (destination >= 0 ? (destination + 1) << kFlagDestinationShift : 0));
     r.target = p.target;
     c.patches.push_back(r);
   }
@@ -524,7 +585,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   const uint64_t lightmap_bytes = uint64_t(layout.width) * layout.height * 3;
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& j = report.root()["pack"];
-  j["patches"] = patches.size();
+  j["patches"] = stored.size();
+  {
+    uint64_t split = 0, texels = 0;
+    for (const StoredPatch& sp : stored) {
+      if (sp.destination != 0) continue;
+      ++split;
+      texels += uint64_t(patches[sp.source].dest.w) * uint64_t(patches[sp.source].dest.h);
+    }
+    j["split_for_alpha"] = {
+        {"patches", split},
+        {"texels", texels},
+        {"rule",
+         "tinted patches of the groups without a light (base, static shadows) stored as three "
+         "1-channel patches, largest first, while the 1-channel channel-texels fit the alpha "
+         "plane under the 3-channel ones; each split texel is drawn 3 times on a rebuild"}};
+  }
   j["patches_by_kind"] = by_kind;
   j["negative_patches"] = negative;
   {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -197,6 +198,35 @@ TEST_F(GlesAccuracy, PackWithAnIndirectMapMatchesTheCpuReference) {
   RuntimeLimits cpu;
   cpu.force_cpu_fallback = true;
   run(cpu, "cpu fallback, indirect map", kMaxRelativeRmse, kMaxMedianBias, cooked_indirect_);
+}
+
+// 1-channel patches that draw into one map channel (pack::kFlagDestinationMask: the cooker
+// stores tinted base patches as three of them where atlas alpha planes have room): the room's
+// grey patches edited to draw into R, G or B in turn (the table checksum fixed), on GLES against
+// the CPU reference of the same pack, under the same bars.
+TEST_F(GlesAccuracy, OneChannelDestinationPatchesMatchTheCpuReference) {
+  testing::CookedPack edited;
+  edited.bytes = cooked_->bytes;
+  Error error;
+  ASSERT_EQ(PackView::open(edited.bytes.data(), edited.bytes.size(), &edited.pack, &error),
+            Status::kOk);
+  const uint64_t records =
+      uint64_t(reinterpret_cast<const uint8_t*>(&edited.pack.patch(0)) - edited.bytes.data());
+  uint32_t grey = 0;
+  for (uint32_t p = 0; p < edited.pack.patch_count(); ++p) {
+    if (edited.pack.patch(p).channel_count != 1) continue;
+    const uint8_t flags = uint8_t(edited.pack.patch(p).flags |
+                                  ((grey++ % 4) << pack::kFlagDestinationShift));  // 0: grey
+    edited.bytes[records + p * sizeof(pack::PatchRecord) + offsetof(pack::PatchRecord, flags)] =
+        flags;
+  }
+  test::fix_checksum(edited.bytes.data(), edited.bytes.size());
+  ASSERT_EQ(PackView::open(edited.bytes.data(), edited.bytes.size(), &edited.pack, &error),
+            Status::kOk)
+      << error.message;
+  std::printf("%u grey patches, three in four of them drawing one map channel\n", grey);
+  ASSERT_GT(grey, 8u);
+  run(RuntimeLimits{}, "gpu, one-channel destinations", kMaxRelativeRmse, kMaxMedianBias, &edited);
 }
 
 // Patches touch in the atlas (no gutter), so nothing around a patch may reach a map: the room

@@ -17,6 +17,7 @@
 #include "lightpatch/cooker/pack_builder.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/group_rules.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/patch_decode.h"
 #include "pack_bytes.h"
@@ -224,12 +225,15 @@ TEST(PackBuilder, PatchesFollowRegionsSignsAndGroups) {
   }
   EXPECT_GT(negative, 0);  // the bounce rims are kept, not clipped
   // Light 0 is tinted: its patches are 3-channel where the tint exceeds half an output step
-  // (decided per patch), the others 1-channel; the base map is always 3-channel.
+  // (decided per patch), the others 1-channel; the base map is always 3-channel (or split into
+  // its three channels apart, each drawing into its own map channel).
   int tinted = 0;
   for (uint32_t i = 0; i < v.patch_count(); ++i) {
     const pack::GroupRecord& g = v.group(v.patch(i).group);
     if (g.kind == pack::kGroupBase) {
-      EXPECT_EQ(v.patch(i).channel_count, 3);
+      EXPECT_TRUE(
+          v.patch(i).channel_count == 3 ||
+          (v.patch(i).channel_count == 1 && pack::patch_destination(v.patch(i).flags) >= 0));
     } else if (g.light == 0) {
       EXPECT_TRUE(v.patch(i).channel_count == 3 || v.patch(i).channel_count == 1);
       tinted += v.patch(i).channel_count == 3 ? 1 : 0;
@@ -267,6 +271,60 @@ TEST(PackBuilder, UnusedAtlasTexelsNeverReachTheMap) {
     ASSERT_EQ(clean.rebuild(st), Status::kOk);
     ASSERT_EQ(dirty.rebuild(st), Status::kOk);
     EXPECT_TRUE(std::equal(clean.rgb(), clean.rgb() + n, dirty.rgb())) << "state " << state;
+  }
+}
+
+// Tinted patches of the groups without a light stored as three 1-channel patches (one map
+// channel each) fill the alpha plane that 3-channel patches leave empty: with every light's
+// patches kept tinted and only the tinted light (few grey patches), part of the base map is split,
+// the atlases shrink, and every state recomposes to the same bits as the pack without the split.
+TEST(PackBuilder, SplittingTintedPatchesFillsTheAlphaPlaneAndRecomposesTheSame) {
+  test::SyntheticOptions o;
+  o.lights = 1;
+  test::Synthetic s = test::make_synthetic(o);
+  PackOptions po;
+  po.keep_colour = true;
+  po.tile_size = 8;  // base tiles small enough to split some
+  Report report_split, report_whole;
+  const std::vector<uint8_t> split = build_pack(s.scene, s.layout, s.maps, po, report_split);
+  po.fill_alpha = false;
+  const std::vector<uint8_t> whole = build_pack(s.scene, s.layout, s.maps, po, report_whole);
+  PackView a, b;
+  ASSERT_EQ(PackView::open(split.data(), split.size(), &a, nullptr), Status::kOk);
+  ASSERT_EQ(PackView::open(whole.data(), whole.size(), &b, nullptr), Status::kOk);
+  auto atlas_texels = [](const PackView& v) {
+    uint64_t t = 0;
+    for (uint32_t i = 0; i < v.atlas_count(); ++i)
+      t += uint64_t(v.atlas(i).width) * v.atlas(i).height;
+    return t;
+  };
+  uint32_t one_channel_destinations = 0;
+  for (uint32_t i = 0; i < a.patch_count(); ++i) {
+    const int d = pack::patch_destination(a.patch(i).flags);
+    if (d < 0) continue;
+    ++one_channel_destinations;
+    EXPECT_EQ(a.patch(i).channel_count, 1);
+    EXPECT_FALSE(group_has_light(a.group(a.patch(i).group).kind));
+  }
+  const int split_patches = report_split.root()["pack"]["split_for_alpha"]["patches"].get<int>();
+  std::printf("%d patches split, atlas texels %llu -> %llu\n", split_patches,
+              static_cast<unsigned long long>(atlas_texels(b)),
+              static_cast<unsigned long long>(atlas_texels(a)));
+  EXPECT_GT(split_patches, 0);
+  EXPECT_EQ(one_channel_destinations, 3u * uint32_t(split_patches));
+  EXPECT_EQ(a.patch_count(), b.patch_count() + 2u * uint32_t(split_patches));
+  EXPECT_LT(atlas_texels(a), atlas_texels(b));
+  SceneState st;
+  CpuRecomposer ra, rb;
+  ASSERT_EQ(st.init(a, nullptr), Status::kOk);
+  ASSERT_EQ(ra.init(a, nullptr), Status::kOk);
+  ASSERT_EQ(rb.init(b, nullptr), Status::kOk);
+  const size_t n = size_t(ra.width()) * ra.height() * 3;
+  for (int state = 0; state < 4; ++state) {
+    set_all(st, a, (state & 1) != 0, (state & 2) != 0);
+    ASSERT_EQ(ra.rebuild(st), Status::kOk);
+    ASSERT_EQ(rb.rebuild(st), Status::kOk);
+    EXPECT_TRUE(std::equal(ra.rgb(), ra.rgb() + n, rb.rgb())) << "state " << state;
   }
 }
 

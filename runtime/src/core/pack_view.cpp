@@ -463,8 +463,12 @@ Status Validator::run(Parsed* out) {
     if (!std::isfinite(p.scale) || !(p.scale > 0.0f)) {
       return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
     }
-    if ((p.flags & ~uint32_t(kFlagNegative)) != 0) {
+    if ((p.flags & ~uint32_t(kFlagNegative | kFlagDestinationMask)) != 0) {
       return fail(Status::kCorrupt, "patch %u: unknown flags %02x", i, p.flags);
+    }
+    if (patch_destination(p.flags) >= 0 && p.channel_count != 1) {
+      return fail(Status::kCorrupt, "patch %u: a destination channel on a %u-channel patch", i,
+                  p.channel_count);
     }
   }
 
