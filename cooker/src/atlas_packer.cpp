@@ -1,7 +1,6 @@
 #include "atlas_packer.h"
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -151,15 +150,13 @@ bool fill(const std::vector<PackItem>& items, const std::vector<size_t>& order, 
   return true;
 }
 
-// Widths to try for an atlas that holds everything left: spread geometrically over [lo, hi].
-std::vector<int> candidate_widths(int lo, int hi, int count) {
+// Widths to try for an atlas that holds everything left: from lo, each a fifth wider than the
+// last (about 24 from 16 to 2048), then hi; integers, so that every target writes the same pack.
+std::vector<int> candidate_widths(int lo, int hi) {
   std::vector<int> out;
-  for (int i = 0; i < count; ++i) {
-    const double t = count > 1 ? double(i) / (count - 1) : 0.0;
-    const double w = double(lo) * std::pow(double(hi) / double(lo), t);
-    out.push_back(std::clamp(align_up(int64_t(w)), lo, hi));
-  }
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  for (int w = lo; w < hi; w = std::max(align_up(int64_t(w) * 6 / 5), w + kAtlasAlign))
+    out.push_back(w);
+  out.push_back(hi);
   return out;
 }
 
@@ -216,7 +213,7 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
       // Everything left may fit one atlas: try widths from the narrowest that can hold it, then
       // every few texels around the best of them.
       const int lo = std::min(max_size, std::max(align_up(widest), align_up(need / max_size)));
-      const std::vector<int> widths = candidate_widths(lo, max_size, 24);
+      const std::vector<int> widths = candidate_widths(lo, max_size);
       for (int w : widths) try_width(w);
       if (found) {
         const int w0 = align_up(best.used_width);
