@@ -437,7 +437,8 @@ Status Runtime::create_buffers(Error* error) {
       ax0 = p.atlas_x, ay0 = p.atlas_y, ax1 = ax0 + p.width, ay1 = ay0 + p.height;
       params[0] = p.scale * patch_sign(pack_.group(p.group).kind, p.flags);
       params[1] = p.channel;
-      params[2] = p.channel_count;
+      const int destination = pack::patch_destination(p.flags);
+      params[2] = destination >= 0 ? 4.0f + float(destination) : float(p.channel_count);
       params[3] = p.encoding == pack::kEncodingSquare ? 1.0f : 0.0f;
       unit = float(p.atlas % kUnits);
     } else {  // a full-target quad, sampling atlas 0 stretched over it (fill-rate floor)
