@@ -1,102 +1,163 @@
 #include "atlas_packer.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
+#include <string>
 
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/pack_format.h"
 
 namespace lightpatch::cooker {
 
 namespace {
 
-// Skyline of one channel: segments [x, x+w) whose free space starts at row y (rows grow down).
+constexpr int kAtlasAlign = int(pack::kAtlasAlign);
+
+// Columns [x, x + w) are free from row y down (rows grow down).
+struct Segment {
+  int x, y, w;
+};
+
+// Skyline of one channel: segments sorted by x, covering the atlas width, neighbours at
+// different heights.
 class Skyline {
  public:
-  struct Segment {
-    int x, y, w;
-  };
-  explicit Skyline(int width) { segs_.push_back({0, 0, width}); }
-
-  // Highest occupied row over [x, x+w) (the lowest y at which a rect of width w may start).
-  int level(int x, int w) const {
-    int y = 0;
-    for (const Segment& s : segs_) {
-      if (s.x + s.w <= x || s.x >= x + w) continue;
-      y = std::max(y, s.y);
-    }
-    return y;
-  }
+  explicit Skyline(int width) : segs_{{0, 0, width}} {}
   const std::vector<Segment>& segments() const { return segs_; }
 
-  void place(int x, int y_top, int w) {  // the rect occupies columns [x, x+w) down to row y_top
-    std::vector<Segment> next;
+  // The rect occupies columns [x, x + w) down to row y_top.
+  void place(int x, int y_top, int w) {
+    next_.clear();
+    bool inserted = false;
+    auto push = [&](const Segment& s) {
+      if (!next_.empty() && next_.back().y == s.y)
+        next_.back().w += s.w;
+      else
+        next_.push_back(s);
+    };
+    auto insert = [&]() {
+      if (!inserted) push({x, y_top, w});
+      inserted = true;
+    };
     for (const Segment& s : segs_) {
-      if (s.x + s.w <= x || s.x >= x + w) {
-        next.push_back(s);
+      if (s.x + s.w <= x) {
+        push(s);
         continue;
       }
-      if (s.x < x) next.push_back({s.x, s.y, x - s.x});
-      if (s.x + s.w > x + w) next.push_back({x + w, s.y, s.x + s.w - (x + w)});
+      if (s.x >= x + w) {
+        insert();
+        push(s);
+        continue;
+      }
+      if (s.x < x) push({s.x, s.y, x - s.x});
+      insert();
+      if (s.x + s.w > x + w) push({x + w, s.y, s.x + s.w - (x + w)});
     }
-    next.push_back({x, y_top, w});
-    std::sort(next.begin(), next.end(),
-              [](const Segment& a, const Segment& b) { return a.x < b.x; });
-    segs_.clear();
-    for (const Segment& s : next) {
-      if (!segs_.empty() && segs_.back().y == s.y)
-        segs_.back().w += s.w;
-      else
-        segs_.push_back(s);
-    }
+    insert();
+    segs_.swap(next_);
   }
-
-  void widen(int old_width, int new_width) { place(old_width, 0, new_width - old_width); }
 
  private:
-  std::vector<Segment> segs_;
+  std::vector<Segment> segs_, next_;
 };
 
-struct Atlas {
-  int size = 0;
-  std::vector<Skyline> channels;
-  bool empty = true;
-  explicit Atlas(int s) : size(s), channels(4, Skyline(s)) {}
+// The skyline of channels [0, n) together (the highest of them at every column) into `out`.
+void merge(const Skyline* channels, int n, int width, std::vector<Segment>& out) {
+  out.clear();
+  size_t at[4] = {0, 0, 0, 0};
+  for (int x = 0; x < width;) {
+    int y = 0, end = width;
+    for (int k = 0; k < n; ++k) {
+      const std::vector<Segment>& s = channels[k].segments();
+      while (s[at[k]].x + s[at[k]].w <= x) ++at[k];
+      y = std::max(y, s[at[k]].y);
+      end = std::min(end, s[at[k]].x + s[at[k]].w);
+    }
+    if (!out.empty() && out.back().y == y)
+      out.back().w += end - x;
+    else
+      out.push_back({x, y, end - x});
+    x = end;
+  }
+}
 
-  // Best (lowest, then leftmost) position for a w x h rect over channels [c, c+n); false if none.
-  bool find(int c, int n, int w, int h, int* out_x, int* out_y) const {
-    int best_x = -1, best_y = size + 1;
-    for (int k = c; k < c + n; ++k) {
-      for (const Skyline::Segment& s : channels[size_t(k)].segments()) {
-        const int x = s.x;
-        if (x + w > size) continue;
-        int y = 0;
-        for (int j = c; j < c + n; ++j) y = std::max(y, channels[size_t(j)].level(x, w));
-        if (y + h > size) continue;
-        if (y < best_y || (y == best_y && x < best_x)) {
-          best_x = x;
-          best_y = y;
-        }
+// The lowest, then leftmost, position of a w x h rect on the skyline within width x height, if
+// it is lower than *best_y (then *best_x, *best_y are updated).
+bool find(const std::vector<Segment>& segs, int width, int height, int w, int h, int* best_x,
+          int* best_y) {
+  bool found = false;
+  int limit = std::min(*best_y, height - h + 1);  // y must stay below this
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const int x = segs[i].x;
+    if (x + w > width) break;
+    int y = 0;
+    for (size_t j = i; j < segs.size() && segs[j].x < x + w && y < limit; ++j)
+      y = std::max(y, segs[j].y);
+    if (y < limit) {
+      *best_x = x;
+      *best_y = limit = y;
+      found = true;
+    }
+  }
+  return found;
+}
+
+int align_up(int64_t v) {
+  return int((v + kAtlasAlign - 1) / kAtlasAlign * kAtlasAlign);
+}
+
+// One atlas filled with the patches of `order` in turn, in a width x height area.
+struct Fill {
+  std::vector<Placement> placements;  // parallel to `order`; atlas -1: did not fit
+  std::vector<size_t> postponed;      // items that did not fit, in order
+  int used_width = 0, used_height = 0;
+  int64_t texels() const { return int64_t(align_up(used_width)) * align_up(used_height); }
+};
+
+// With `all`, gives up (false) at the first patch that does not fit.
+bool fill(const std::vector<PackItem>& items, const std::vector<size_t>& order, int width,
+          int height, bool all, Fill* out) {
+  std::vector<Skyline> channels(4, Skyline(width));
+  std::vector<Segment> rgb;
+  out->placements.assign(order.size(), Placement{-1, 0, 0, 0});
+  out->postponed.clear();
+  out->used_width = out->used_height = 0;
+  for (size_t k = 0; k < order.size(); ++k) {
+    const PackItem& it = items[order[k]];
+    const int w = it.width, h = it.height;
+    int x = 0, y = std::numeric_limits<int>::max(), channel = -1;
+    if (it.channels == 3) {
+      merge(channels.data(), 3, width, rgb);
+      if (find(rgb, width, height, w, h, &x, &y)) channel = 0;
+    } else {
+      // The lowest place in any channel: 1-channel patches fill the alpha plane under 3-channel
+      // ones before they raise the atlas.
+      for (int c = 0; c < 4; ++c) {
+        if (find(channels[size_t(c)].segments(), width, height, w, h, &x, &y)) channel = c;
       }
     }
-    if (best_x < 0) return false;
-    *out_x = best_x;
-    *out_y = best_y;
-    return true;
+    if (channel < 0) {
+      if (all) return false;
+      out->postponed.push_back(order[k]);
+      continue;
+    }
+    for (int c = channel; c < channel + it.channels; ++c) channels[size_t(c)].place(x, y + h, w);
+    out->placements[k] = Placement{0, x, y, channel};
+    out->used_width = std::max(out->used_width, x + w);
+    out->used_height = std::max(out->used_height, y + h);
   }
-  void place(int c, int n, int x, int y, int w, int h) {
-    for (int k = c; k < c + n; ++k) channels[size_t(k)].place(x, y + h, w);
-    empty = false;
-  }
-  void grow() {
-    for (Skyline& s : channels) s.widen(size, size * 2);
-    size *= 2;
-  }
-};
+  return true;
+}
 
-int pow2_at_least(int v) {
-  int p = 1;
-  while (p < v) p *= 2;
-  return p;
+// Widths to try for an atlas that holds everything left: from lo, each a fifth wider than the
+// last (about 24 from 16 to 2048), then hi; integers, so that every target writes the same pack.
+std::vector<int> candidate_widths(int lo, int hi) {
+  std::vector<int> out;
+  for (int w = lo; w < hi; w = std::max(align_up(int64_t(w) * 6 / 5), w + kAtlasAlign))
+    out.push_back(w);
+  out.push_back(hi);
+  return out;
 }
 
 }  // namespace
@@ -104,15 +165,16 @@ int pow2_at_least(int v) {
 AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
   AtlasLayout out;
   out.placements.resize(items.size());
-  if (max_size < kMinAtlasSize || (max_size & (max_size - 1)) != 0) {
-    throw CookError("maximum atlas size " + std::to_string(max_size) +
-                    " must be a power of two >= " + std::to_string(kMinAtlasSize));
+  if (max_size < kMinAtlasSize || max_size % kAtlasAlign != 0) {
+    throw CookError("maximum atlas size " + std::to_string(max_size) + " must be a multiple of " +
+                    std::to_string(kAtlasAlign) + " >= " + std::to_string(kMinAtlasSize));
   }
   for (const PackItem& it : items) {
-    if (it.width + 2 > max_size || it.height + 2 > max_size) {
-      throw CookError("a " + std::to_string(it.width) + "x" + std::to_string(it.height) +
-                      " patch does not fit a " + std::to_string(max_size) +
-                      " atlas with its gutter");
+    if (it.width < 1 || it.height < 1 || it.width > max_size || it.height > max_size ||
+        (it.channels != 1 && it.channels != 3)) {
+      throw CookError("a " + std::to_string(it.width) + "x" + std::to_string(it.height) + "x" +
+                      std::to_string(it.channels) + " patch does not fit a " +
+                      std::to_string(max_size) + " atlas");
     }
   }
   std::vector<size_t> order(items.size());
@@ -121,56 +183,56 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
     const PackItem& p = items[a];
     const PackItem& q = items[b];
     if (p.channels != q.channels) return p.channels > q.channels;
-    return std::max(p.width, p.height) > std::max(q.width, q.height);
+    if (p.height != q.height) return p.height > q.height;
+    return p.width > q.width;
   });
-  auto cost = [&](size_t i) {
-    return int64_t(items[i].width + 2) * (items[i].height + 2) * items[i].channels;
-  };
-  std::vector<int> used_rows;  // per atlas: rows actually used (to trim the height)
+  const int64_t max_texels = int64_t(max_size) * max_size;
   while (!order.empty()) {
     if (out.atlases.size() >= 256) throw CookError("the patches need more than 256 atlases");
-    const int atlas_index = static_cast<int>(out.atlases.size());
-    const PackItem& first = items[order[0]];
-    Atlas atlas(std::min(
-        max_size, pow2_at_least(std::max({kMinAtlasSize, first.width + 2, first.height + 2}))));
-    int64_t remaining = 0;
-    for (size_t i : order) remaining += cost(i);
-    int rows = 0;
-    std::vector<size_t> postponed;
+    // Texels the patches left need at least: 3-channel patches each take a rectangle of their
+    // own; all of them together a quarter of their channel-texels.
+    int64_t rgb_texels = 0, channel_texels = 0;
+    int widest = 1;
     for (size_t i : order) {
-      const PackItem& it = items[i];
-      const int w = it.width + 2, h = it.height + 2;
-      for (;;) {
-        int x = 0, y = 0, channel = -1;
-        if (it.channels == 3) {
-          if (atlas.find(0, 3, w, h, &x, &y)) channel = 0;
-        } else {
-          for (int c = 0; c < 4 && channel < 0; ++c) {
-            if (atlas.find(c, 1, w, h, &x, &y)) channel = c;
-          }
-        }
-        if (channel >= 0) {
-          atlas.place(channel, it.channels, x, y, w, h);
-          out.placements[i] = Placement{atlas_index, x + 1, y + 1, channel};
-          rows = std::max(rows, y + h);
-          break;
-        }
-        const int64_t s_a = int64_t(atlas.size) * atlas.size * 4;
-        if (atlas.size < max_size && (atlas.empty || 2 * s_a < remaining)) {
-          atlas.grow();
-          continue;
-        }
-        postponed.push_back(i);
-        break;
-      }
-      remaining -= cost(i);
+      const int64_t t = int64_t(items[i].width) * items[i].height;
+      channel_texels += t * items[i].channels;
+      if (items[i].channels == 3) rgb_texels += t;
+      widest = std::max(widest, items[i].width);
     }
-    // The atlas stays square while packing; rows never used at the bottom are trimmed, keeping a
-    // power-of-two height.
-    int height = atlas.size;
-    while (height / 2 >= rows && height / 2 >= 1) height /= 2;
-    out.atlases.push_back(AtlasSize{atlas.size, height});
-    order.swap(postponed);
+    const int64_t need = std::max(rgb_texels, (channel_texels + 3) / 4);
+    Fill best, trial;
+    bool found = false;
+    auto try_width = [&](int w) {
+      if (fill(items, order, w, max_size, true, &trial) &&
+          (!found || trial.texels() < best.texels())) {
+        std::swap(best, trial);
+        found = true;
+      }
+    };
+    if (need <= max_texels) {
+      // Everything left may fit one atlas: try widths from the narrowest that can hold it, then
+      // every few texels around the best of them.
+      const int lo = std::min(max_size, std::max(align_up(widest), align_up(need / max_size)));
+      const std::vector<int> widths = candidate_widths(lo, max_size);
+      for (int w : widths) try_width(w);
+      if (found) {
+        const int w0 = align_up(best.used_width);
+        const auto at = std::lower_bound(widths.begin(), widths.end(), w0);
+        const int from = at == widths.begin() ? lo : *(at - 1);
+        const int to = at == widths.end() || at + 1 == widths.end() ? max_size : *(at + 1);
+        const int step = std::max(kAtlasAlign, align_up((to - from) / 16));
+        for (int w = from; w <= to; w += step) try_width(w);
+      }
+    }
+    if (!found) fill(items, order, max_size, max_size, false, &best);
+    const int atlas_index = int(out.atlases.size());
+    for (size_t k = 0; k < order.size(); ++k) {
+      if (best.placements[k].atlas < 0) continue;
+      out.placements[order[k]] = best.placements[k];
+      out.placements[order[k]].atlas = atlas_index;
+    }
+    out.atlases.push_back(AtlasSize{align_up(best.used_width), align_up(best.used_height)});
+    order = best.postponed;
   }
   return out;
 }

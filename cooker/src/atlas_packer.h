@@ -1,10 +1,13 @@
-// Packing patches into the channels of RGBA8 atlases (thesis §4.1.5): patches sorted by channel
-// count then max(width, height), descending; a 3-channel patch takes channels 0-2 of one
-// rectangle, a 1-channel patch one channel, trying R, G, B, A in turn so that a channel fills
-// before the next opens; when a patch fits nowhere the atlas doubles (width and height) if
-// 2 * S_a < S_l (S_a: the atlas's channel-texels, S_l: the channel-texels of the patches still to
-// place in this pass) and it is below the maximum size, otherwise the patch waits for the next
-// atlas. Each patch is surrounded by a one-texel gutter (edge texels replicated) in its channels.
+// Packing patches into the channels of RGBA8 atlases (thesis §4.1.5, without its power-of-two
+// sizes and gutters): patches sorted by channel count, then height, then width, descending; a
+// 3-channel patch takes channels 0-2 of one rectangle, a 1-channel patch the lowest place of any
+// channel (so grey patches fill the alpha plane under tinted ones before they raise the atlas);
+// each at the lowest, then leftmost, place of its channels' skylines. Atlas sides are multiples of
+// pack::kAtlasAlign up to the maximum size: while the patches left need more than one atlas of
+// the maximum size, the atlas is that size (what does not fit waits for the next); the last one
+// takes the width, among those tried, that holds all the patches left in the fewest texels.
+// Patches touch: the runtime reads only a patch's own texels (texelFetch at texel centres), so
+// no gutter is needed.
 #pragma once
 
 #include <cstdint>
@@ -13,13 +16,13 @@
 namespace lightpatch::cooker {
 
 struct PackItem {
-  int width = 0, height = 0;  // patch texels (without gutter)
+  int width = 0, height = 0;  // patch texels
   int channels = 1;           // 1 or 3
 };
 
 struct Placement {
   int atlas = 0;
-  int x = 0, y = 0;  // top-left texel of the patch itself (the gutter is at x-1, y-1)
+  int x = 0, y = 0;  // top-left texel of the patch
   int channel = 0;   // first channel
 };
 
@@ -27,6 +30,7 @@ struct AtlasSize {
   int width = 0, height = 0;
 };
 
+// The smallest maximum atlas size accepted.
 constexpr int kMinAtlasSize = 16;
 
 struct AtlasLayout {
@@ -34,8 +38,9 @@ struct AtlasLayout {
   std::vector<AtlasSize> atlases;
 };
 
-// Throws CookError if a patch (plus gutter) is larger than max_size or more than 256 atlases
-// would be needed.
+// `max_size`: the largest atlas side, a multiple of pack::kAtlasAlign >= kMinAtlasSize. Throws
+// CookError if it is not, if a patch is larger than max_size, or if more than 256 atlases would
+// be needed.
 AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size);
 
 }  // namespace lightpatch::cooker

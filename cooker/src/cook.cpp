@@ -104,11 +104,10 @@ std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, 
 
 FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const BakeOptions& bake,
                       Progress& progress, Report& report) {
-  FloatImage blocks;
   FloatImage map =
-      bake_state(p.scene, p.layout, p.texels, *p.tracer, state, bake, progress, report, &blocks);
+      bake_state(p.scene, p.layout, p.texels, *p.tracer, state, bake, progress, report);
   progress.begin("finalize maps", 1);
-  finalize_map(map, blocks, p.scene, p.layout, p.texels);
+  finalize_map(map, p.scene, p.layout, p.texels);
   report.stage_time("finalize", progress.end());
   return map;
 }

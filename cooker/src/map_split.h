@@ -1,9 +1,10 @@
 // Two-level storage of a map (pack_format.h, "Two target maps"): its bounce part on the indirect
-// map, 1/s of the light map's resolution per axis (the block image the bake magnified), and on
+// map, 1/s of the light map's resolution per axis (the block image of its bounce light), and on
 // the light map the rest: the map less the indirect map's magnification (direct light, and
-// wherever the magnification differs from the finalized map: chart edges, seams). The light-map
-// part is taken against the quantized indirect part, so light map + magnified indirect map gives
-// back the baked map to the light map's own 8-bit rounding.
+// wherever the magnification differs from the finalized map: creases and contacts inside a chart,
+// chart edges, seams; negative where the magnification is too bright). The light-map part is
+// taken against the quantized indirect part, so light map + magnified indirect map gives back
+// the baked map to the light map's own 8-bit rounding.
 #pragma once
 
 #include <vector>

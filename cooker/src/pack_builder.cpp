@@ -8,6 +8,7 @@
 
 #include "atlas_packer.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/group_rules.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
 #include "map_split.h"
@@ -48,6 +49,57 @@ float significance(const FloatImage& map, float at_authored) {
   return peak > 0.0f ? std::min(at_authored, 0.5f * peak / 255.0f) : at_authored;
 }
 
+// A patch as stored: source patch `source` whole (destination -1), or its channel `destination`
+// alone as a 1-channel patch that draws into that map channel only.
+struct StoredPatch {
+  size_t source = 0;
+  int destination = -1;
+};
+
+std::vector<StoredPatch> whole_patches(const std::vector<SourcePatch>& patches) {
+  std::vector<StoredPatch> out(patches.size());
+  for (size_t i = 0; i < patches.size(); ++i) out[i].source = i;
+  return out;
+}
+
+// A 3-channel patch takes channels 0-2 of its atlas texels; only 1-channel patches can use
+// channel 3, so a pack of mostly tinted patches leaves a quarter of its atlases empty. Tinted
+// patches of the groups without a light (B and the static shadows: drawn on a full rebuild, and
+// the static shadows on their object's toggle, never on a light change) are stored as three
+// 1-channel patches, largest first, while the 1-channel channel-texels still fit the alpha plane
+// under the 3-channel patches left. Each split texel costs two more texels drawn when its group
+// is drawn; the decoded values are the same bytes, so the recomposition is too.
+std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches) {
+  int64_t rgb = 0, grey = 0;  // texels of 3-channel patches, channel-texels of 1-channel ones
+  std::vector<size_t> candidates;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const int64_t t = int64_t(patches[i].dest.w) * patches[i].dest.h;
+    (patches[i].channels == 3 ? rgb : grey) += t;
+    if (patches[i].channels == 3 && !group_has_light(patches[i].kind)) candidates.push_back(i);
+  }
+  std::stable_sort(candidates.begin(), candidates.end(), [&](size_t a, size_t b) {
+    return int64_t(patches[a].dest.w) * patches[a].dest.h >
+           int64_t(patches[b].dest.w) * patches[b].dest.h;
+  });
+  std::vector<uint8_t> split(patches.size(), 0);
+  for (size_t i : candidates) {
+    const int64_t t = int64_t(patches[i].dest.w) * patches[i].dest.h;
+    if (grey + 3 * t > rgb - t) continue;  // a smaller one may still fit
+    grey += 3 * t;
+    rgb -= t;
+    split[i] = 1;
+  }
+  std::vector<StoredPatch> out;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    if (!split[i]) {
+      out.push_back({i, -1});
+      continue;
+    }
+    for (int c = 0; c < 3; ++c) out.push_back({i, c});
+  }
+  return out;
+}
+
 nlohmann::json error_json(const EncodingError& e) {
   nlohmann::json j;
   j["relative_rmse"] = e.sum_sq_value > 0.0 ? std::sqrt(e.sum_sq_error / e.sum_sq_value) : 0.0;
@@ -78,10 +130,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                     std::to_string(layout.height) + " out of range");
   }
   if (options.max_atlas_size < kMinAtlasSize || options.max_atlas_size > int(kMaxAtlasSize) ||
-      (options.max_atlas_size & (options.max_atlas_size - 1)) != 0) {
+      options.max_atlas_size % int(kAtlasAlign) != 0) {
     throw CookError("maximum atlas size " + std::to_string(options.max_atlas_size) +
-                    " must be a power of two in " + std::to_string(kMinAtlasSize) + ".." +
-                    std::to_string(kMaxAtlasSize));
+                    " must be a multiple of " + std::to_string(kAtlasAlign) + " in " +
+                    std::to_string(kMinAtlasSize) + ".." + std::to_string(kMaxAtlasSize));
   }
   if (!std::isfinite(maps.output_step) || maps.output_step < 0.0f) {
     throw CookError("output step must be finite and >= 0");
@@ -120,8 +172,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     light_threshold[i] = significance(maps.contribution[i], half_step / authored[i]);
   const float base_threshold = significance(maps.base, half_step);
   // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
-  // those corners only; a tile also never exceeds an atlas (less its gutters).
-  const int max_dim = std::min(options.max_atlas_size - 2, std::max(options.tile_size, 4));
+  // those corners only; a tile also never exceeds an atlas.
+  const int max_dim = std::min(options.max_atlas_size, std::max(options.tile_size, 4));
   std::vector<MapJob> jobs;
   {
     MapJob j;
@@ -260,7 +312,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<ColourDecision> colour(jobs.size());
   struct SplitDecision {
     bool split = false;
-    uint64_t plain = 0, detail = 0, indirect = 0;  // atlas channel-texels (gutters included)
+    uint64_t plain = 0, detail = 0, indirect = 0;  // atlas channel-texels
   };
   std::vector<SplitDecision> split(jobs.size());
   std::vector<std::vector<SourcePatch>> split_patches(jobs.size());  // light-map + indirect parts
@@ -288,8 +340,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     };
     auto cost = [](const std::vector<SourcePatch>& v) {
       uint64_t n = 0;
-      for (const SourcePatch& p : v)
-        n += uint64_t(p.dest.w + 2) * uint64_t(p.dest.h + 2) * p.channels;
+      for (const SourcePatch& p : v) n += uint64_t(p.dest.w) * uint64_t(p.dest.h) * p.channels;
       return n;
     };
     std::vector<SourcePatch>& plain = per_job[size_t(i)];
@@ -317,10 +368,9 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     }
   });
   // One choice per light group (the base map with the static shadows; a light's C_l with its
-  // S_ol and pair corrections): the runtime clamps each presented map at zero, and a state's
-  // light-map part and indirect part are each non-negative only if every map of a light is
-  // split alike (the indirect part then is the state's bounce light, the light-map part its
-  // direct light).
+  // S_ol and pair corrections), so that a state's indirect part is the bounce light of the groups
+  // that split, whole. The light-map part may be negative where the indirect map's filter blends
+  // across a crease; the runtime presents both maps signed and a game clamps L + I.
   std::map<int, uint64_t> group_plain, group_split;
   for (size_t i = 0; i < jobs.size(); ++i) {
     const bool splittable = can_split && jobs[i].indirect && !jobs[i].indirect->data.empty();
@@ -330,8 +380,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
   for (size_t i = 0; i < jobs.size(); ++i) {
     const int g = jobs[i].prototype.light;
-    const bool split_group =
-        can_split && (options.always_split || group_split[g] < group_plain[g]);
+    const bool split_group = can_split && (options.always_split || group_split[g] < group_plain[g]);
     if (!split_group || !jobs[i].indirect || jobs[i].indirect->data.empty()) {
       per_job_q[i].clear();
       continue;
@@ -388,9 +437,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     c.objects.push_back(r);
   }
 
+  // The stored patches: each source patch, or its three channels apart (see split_for_alpha).
+  const std::vector<StoredPatch> stored =
+      options.fill_alpha ? split_for_alpha(patches) : whole_patches(patches);
+
   // Groups: consecutive patches with one owner (jobs are already in group order).
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const SourcePatch& p = patches[i];
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
     const uint16_t light = p.light < 0 ? kNone16 : uint16_t(p.light);
     const uint16_t object = p.object < 0 ? kNone16 : uint16_t(p.object);
     const uint16_t object_b = p.object_b < 0 ? kNone16 : uint16_t(p.object_b);
@@ -403,9 +456,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   if (c.groups.size() > 0x10000u) throw CookError("more than 65536 patch groups");
 
   // Atlases.
-  std::vector<PackItem> items(patches.size());
-  for (size_t i = 0; i < patches.size(); ++i) {
-    items[i] = PackItem{patches[i].dest.w, patches[i].dest.h, patches[i].channels};
+  std::vector<PackItem> items(stored.size());
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
+    items[i] = PackItem{p.dest.w, p.dest.h, stored[i].destination >= 0 ? 1 : p.channels};
   }
   const AtlasLayout atlas_layout = pack_atlases(items, options.max_atlas_size);
   for (const AtlasSize& a : atlas_layout.atlases) {
@@ -415,21 +469,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     atlas.rgba.assign(size_t(a.width) * a.height * 4, 0);
     c.atlases.push_back(std::move(atlas));
   }
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const SourcePatch& p = patches[i];
-    const QuantizedPatch& q = quantized[i];
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
+    const QuantizedPatch& q = quantized[stored[i].source];
     const Placement& pl = atlas_layout.placements[i];
+    const int destination = stored[i].destination;
+    // Channels of the source patch stored: all, or the destination's.
+    const int first = std::max(destination, 0), count = destination >= 0 ? 1 : p.channels;
     PackContents::Atlas& atlas = c.atlases[size_t(pl.atlas)];
-    // Patch texels and a one-texel gutter replicating the edge texels.
-    for (int y = -1; y <= p.dest.h; ++y) {
-      const int sy = std::clamp(y, 0, p.dest.h - 1);
-      for (int x = -1; x <= p.dest.w; ++x) {
-        const int sx = std::clamp(x, 0, p.dest.w - 1);
+    // The patch texels only: the runtime never reads outside a patch's rectangle.
+    for (int y = 0; y < p.dest.h; ++y) {
+      for (int x = 0; x < p.dest.w; ++x) {
         uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 +
                                    size_t(pl.channel)];
-        for (int ch = 0; ch < p.channels; ++ch) {
-          dst[ch] = q.codes[(size_t(sy) * p.dest.w + size_t(sx)) * size_t(p.channels) + size_t(ch)];
-        }
+        const uint8_t* src =
+            &q.codes[(size_t(y) * p.dest.w + size_t(x)) * size_t(p.channels) + size_t(first)];
+        for (int ch = 0; ch < count; ++ch) dst[ch] = src[ch];
       }
     }
     PatchRecord r{};
@@ -441,10 +496,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     r.dest_y = uint16_t(p.dest.y);
     r.atlas = uint8_t(pl.atlas);
     r.channel = uint8_t(pl.channel);
-    r.channel_count = uint8_t(p.channels);
+    r.channel_count = uint8_t(count);
     r.encoding = q.encoding;
     r.scale = q.scale;
-    r.flags = p.negative ? kFlagNegative : 0;
+    r.flags = uint8_t((p.negative ? kFlagNegative : 0) |
+                      (destination >= 0 ? (destination + 1) << kFlagDestinationShift : 0));
     r.target = p.target;
     c.patches.push_back(r);
   }
@@ -528,7 +584,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   const uint64_t lightmap_bytes = uint64_t(layout.width) * layout.height * 3;
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& j = report.root()["pack"];
-  j["patches"] = patches.size();
+  j["patches"] = stored.size();
+  {
+    uint64_t split = 0, texels = 0;
+    for (const StoredPatch& sp : stored) {
+      if (sp.destination != 0) continue;
+      ++split;
+      texels += uint64_t(patches[sp.source].dest.w) * uint64_t(patches[sp.source].dest.h);
+    }
+    j["split_for_alpha"] = {
+        {"patches", split},
+        {"texels", texels},
+        {"rule",
+         "tinted patches of the groups without a light (base, static shadows) stored as three "
+         "1-channel patches, largest first, while the 1-channel channel-texels fit the alpha "
+         "plane under the 3-channel ones; each split texel is drawn 3 times on a rebuild"}};
+  }
   j["patches_by_kind"] = by_kind;
   j["negative_patches"] = negative;
   {
@@ -548,7 +619,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         "each map is stored either as light-map patches only, or as the means of its s x s texel "
         "blocks (indirect-map patches) plus light-map patches of what their bilinear "
         "magnification leaves out (taken against the quantized block means), whichever takes "
-        "fewer atlas channel-texels, gutters included";
+        "fewer atlas channel-texels";
     int n_split = 0;
     uint64_t plain = 0, stored = 0;
     nlohmann::json per_map = nlohmann::json::array();

@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "lightpatch/cooker/tracer.h"
-#include "lightpatch/indirect_map.h"
 #include "surface_albedo.h"
 #include "worker_pool.h"
 
@@ -371,46 +370,18 @@ void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout,
   stitch(map, texels);
 }
 
-void finalize_map(FloatImage& map, const FloatImage& blocks, const Scene& scene,
-                  const Layout& layout, const TexelSet& texels) {
-  if (blocks.data.empty()) {
-    finalize_map(map, scene, layout, texels);
-    return;
-  }
-  const uint32_t s = uint32_t(map.width / blocks.width);
-  auto magnified = [&](int x, int y, float v[3]) {
-    sample_indirect(blocks.data.data(), 3, uint32_t(blocks.width), uint32_t(blocks.height), s,
-                    uint32_t(x), uint32_t(y), v);
-  };
-  for (int y = 0; y < map.height; ++y)
-    for (int x = 0; x < map.width; ++x) {
-      float v[3];
-      magnified(x, y, v);
-      const bool valid = texels.valid[texels.index(x, y)] != 0;
-      for (int c = 0; c < map.channels; ++c)
-        map.at(x, y, c) = valid ? map.at(x, y, c) - v[c] : 0.0f;
-    }
-  finalize_map(map, scene, layout, texels);
-  for (int y = 0; y < map.height; ++y)
-    for (int x = 0; x < map.width; ++x) {
-      float v[3];
-      magnified(x, y, v);
-      for (int c = 0; c < map.channels; ++c) map.at(x, y, c) += v[c];
-    }
-}
-
 void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
                    const TexelSet& texels, Progress* progress) {
-  const FloatImage none;
-  std::vector<std::pair<FloatImage*, const FloatImage*>> all{{&maps.base, &maps.base_indirect}};
-  for (size_t i = 0; i < maps.contribution.size(); ++i)
-    all.push_back({&maps.contribution[i],
-                   i < maps.contribution_indirect.size() ? &maps.contribution_indirect[i] : &none});
-  for (ShadowMap& s : maps.shadows) all.push_back({&s.map, &s.indirect});
-  for (PairCorrectionMap& p : maps.pair_corrections) all.push_back({&p.map, &p.indirect});
-  for (StaticShadowMap& s : maps.static_shadows) all.push_back({&s.map, &s.indirect});
-  for (auto& [m, blocks] : all) {
-    finalize_map(*m, *blocks, scene, layout, texels);
+  // Every map whole, bounce light included, whether or not the pack stores its bounce part on
+  // the indirect map: the light map then holds the difference (map_split.h), and the block
+  // images need none (block_image() fills their rings).
+  std::vector<FloatImage*> all{&maps.base};
+  for (FloatImage& c : maps.contribution) all.push_back(&c);
+  for (ShadowMap& s : maps.shadows) all.push_back(&s.map);
+  for (PairCorrectionMap& p : maps.pair_corrections) all.push_back(&p.map);
+  for (StaticShadowMap& s : maps.static_shadows) all.push_back(&s.map);
+  for (FloatImage* m : all) {
+    finalize_map(*m, scene, layout, texels);
     if (progress) progress->advance();
   }
 }

@@ -5,6 +5,7 @@
 // first row is the top row and the returned array needs no flip.
 #include "gles_backend.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -94,7 +95,7 @@ void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& 
   const size_t texels = size_t(runtime.width()) * runtime.height();
   std::vector<float> rgba(texels * 4);
   if (runtime.read_light_map(rgba.data(), &error) != Status::kOk) throw CookError(error.message);
-  if (pack.has_indirect_map()) {  // L + I, as the game samples it
+  if (pack.has_indirect_map()) {  // max(L + I, 0), as the game samples it
     std::vector<float> indirect(size_t(runtime.indirect_width()) * runtime.indirect_height() * 4);
     if (runtime.read_indirect_map(indirect.data(), &error) != Status::kOk)
       throw CookError(error.message);
@@ -103,7 +104,7 @@ void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& 
   }
   rgb->resize(texels * 3);
   for (size_t i = 0; i < texels; ++i) {
-    for (int c = 0; c < 3; ++c) (*rgb)[i * 3 + c] = rgba[i * 4 + c];
+    for (int c = 0; c < 3; ++c) (*rgb)[i * 3 + c] = std::max(rgba[i * 4 + c], 0.0f);
   }
 }
 

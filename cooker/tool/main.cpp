@@ -230,7 +230,7 @@ const Verb kVerbs[] = {
      "[--samples N] [--std-error ERR.pfm] [cook's options]",
      kBakeStateHelp},
     {"info", lightpatch::tool::verb_info, "info PACK [--json]",
-     "Prints a pack's lights, objects, groups, patches, atlases and bytes.\n\n"
+     "Prints a pack's lights, objects, groups, patches, atlases, bytes and packing waste.\n\n"
      "options:\n  --json   machine-readable output\n"},
     {"verify", lightpatch::tool::verb_verify, "verify PACK",
      "Checks a pack's header, sections, records and ranges as the runtime's loader does;\n"

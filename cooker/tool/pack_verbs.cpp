@@ -152,6 +152,12 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["atlas_bytes"] = atlas_bytes;
   j["conventional_lightmap_bytes"] = lightmap_bytes;
   j["atlas_to_lightmap_ratio"] = double(atlas_bytes) / double(lightmap_bytes);
+  // Packing waste: atlas bytes no patch channel covers (unused channels, rounding of sizes).
+  uint64_t patch_bytes = 0;
+  for (uint32_t i = 0; i < p.patch_count(); ++i)
+    patch_bytes += uint64_t(p.patch(i).width) * p.patch(i).height * p.patch(i).channel_count;
+  j["atlas_patch_bytes"] = patch_bytes;
+  j["atlas_waste"] = atlas_bytes ? 1.0 - double(patch_bytes) / double(atlas_bytes) : 0.0;
   return j;
 }
 
@@ -254,6 +260,9 @@ int verb_info(Args& args) {
               j["atlas_bytes"].get<unsigned long long>(),
               j["conventional_lightmap_bytes"].get<unsigned long long>(),
               j["atlas_to_lightmap_ratio"].get<double>());
+  std::printf("atlas waste    %.1f %% (patches fill %llu of the atlas bytes)\n",
+              100.0 * j["atlas_waste"].get<double>(),
+              j["atlas_patch_bytes"].get<unsigned long long>());
   return 0;
 }
 

@@ -7,7 +7,8 @@ precision highp int;
 layout(location = 0) in vec2 a_dest;    // target texel corner
 layout(location = 1) in vec2 a_atlas;   // atlas texel corner
 // x: scale * sign (shadow groups and kFlagNegative patches are negative), y: first channel,
-// z: channel count (1 or 3), w: encoding (0 linear, 1 square)
+// z: channel count (1 or 3), or 4 + d for a 1-channel patch drawn into map channel d only
+// (pack_format.h: kFlagDestinationMask), w: encoding (0 linear, 1 square)
 layout(location = 2) in vec4 a_patch;
 layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0..7)
 
@@ -25,10 +26,18 @@ vec4 channel_mask(float c) { return vec4(equal(vec4(c), vec4(0.0, 1.0, 2.0, 3.0)
 
 void main() {
   v_atlas = a_atlas;
-  float step = a_patch.z > 1.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
-  v_mask_r = channel_mask(a_patch.y);
-  v_mask_g = channel_mask(a_patch.y + step);
-  v_mask_b = channel_mask(a_patch.y + 2.0 * step);
+  if (a_patch.z > 3.5) {  // one map channel: the others get a zero mask
+    vec4 m = channel_mask(a_patch.y);
+    float d = a_patch.z - 4.0;
+    v_mask_r = d < 0.5 ? m : vec4(0.0);
+    v_mask_g = d > 0.5 && d < 1.5 ? m : vec4(0.0);
+    v_mask_b = d > 1.5 ? m : vec4(0.0);
+  } else {
+    float step = a_patch.z > 1.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
+    v_mask_r = channel_mask(a_patch.y);
+    v_mask_g = channel_mask(a_patch.y + step);
+    v_mask_b = channel_mask(a_patch.y + 2.0 * step);
+  }
   v_scale = a_patch.x;
   v_square = a_patch.w > 0.5 ? 1 : 0;
   v_unit = int(a_unit + 0.5);

@@ -1,13 +1,15 @@
 #version 300 es
 // Writes the accumulator into the light map the game samples: clamped at zero (light is never
-// negative), times the presentation scale, and rounded here to the nearest half float, ties to
-// even (lightpatch/half_float.h does the same on the CPU), so the RGBA16F write is exact whatever
-// rounding the target applies (llvmpipe truncates toward zero).
+// negative) unless the pack's maps keep their sign (u_signed: a pack with an indirect map, whose
+// light map corrects it; the game clamps L + I), times the presentation scale, and rounded here to
+// the nearest half float, ties to even (lightpatch/half_float.h does the same on the CPU), so the
+// RGBA16F write is exact whatever rounding the target applies (llvmpipe truncates toward zero).
 precision highp float;
 precision highp int;
 
 uniform highp sampler2D u_accumulator;
 uniform float u_scale;
+uniform bool u_signed;
 
 out vec4 o_color;
 
@@ -19,6 +21,9 @@ float round_to_half(float v) {  // v >= 0, finite
 }
 
 void main() {
-  vec3 v = max(texelFetch(u_accumulator, ivec2(gl_FragCoord.xy), 0).rgb * u_scale, vec3(0.0));
-  o_color = vec4(round_to_half(v.r), round_to_half(v.g), round_to_half(v.b), 1.0);
+  vec3 v = texelFetch(u_accumulator, ivec2(gl_FragCoord.xy), 0).rgb * u_scale;
+  if (!u_signed) v = max(v, vec3(0.0));
+  // Round the magnitude: rounding to nearest is symmetric in the sign.
+  vec3 m = abs(v);
+  o_color = vec4(sign(v) * vec3(round_to_half(m.r), round_to_half(m.g), round_to_half(m.b)), 1.0);
 }

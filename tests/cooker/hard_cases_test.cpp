@@ -190,10 +190,9 @@ Compared compare_state(Cooked& c, CpuRecomposer& cpu, const NamedState& st) {
   EXPECT_EQ(cpu.apply(state), Status::kOk);
   Progress progress(true);
   Report report;
-  FloatImage blocks;
-  FloatImage want = bake_state(c.scene, c.layout, c.texels, *c.tracer, st.spec, c.options, progress,
-                               report, &blocks);
-  finalize_map(want, blocks, c.scene, c.layout, c.texels);
+  FloatImage want =
+      bake_state(c.scene, c.layout, c.texels, *c.tracer, st.spec, c.options, progress, report);
+  finalize_map(want, c.scene, c.layout, c.texels);
   expect_finite(want, "bake_state " + st.name);
   const size_t n = size_t(cpu.width()) * cpu.height() * 3;
   size_t bad = 0;
@@ -663,22 +662,25 @@ TEST(HardCases, AlbedoOneInAClosedRoomConverges) {
   RecordProperty("worst_relative_rmse", std::to_string(expect_standard_states_match(c)));
 }
 
-// Bounce light on 2 x 2 blocks (--indirect-scale 2), every light group stored split: the pack's
-// indirect map holds the bounce light, the light map the rest, and every state recomposes like
-// bake_state (the runtime clamps each presented map at zero: both parts stay non-negative).
-TEST(HardCases, IndirectMapHoldsTheBounceLightAndRecomposesLikeBakeState) {
-  Cooked c;
-  Scene& s = c.scene;
+// Two rooms joined by a doorway: the lamp's room is lit directly, the other by bounce only.
+void two_rooms(Scene& s) {
   Material wall;
   wall.albedo = glm::vec3(0.8f, 0.7f, 0.6f);
   s.materials = {wall};
-  // Two rooms joined by a doorway: the lamp's room is lit directly, the other by bounce only.
   test::add_closed_room(s, {-4, 0, -2}, {4, 2.5f, 2}, 0.1f, "room");
   test::add_box(s, {-0.05f, 0.0f, -2.0f}, {0.05f, 2.5f, 1.0f}, "partition");
   test::add_object_box(s, {-2.5f, 0.0f, -0.5f}, {-1.7f, 0.7f, 0.3f}, "crate");
   s.lights = {test::point_light("lamp", {-2.0f, 2.0f, 0.4f}, 5.0f, true),
               test::point_light("fill", {-3.2f, 1.0f, 1.1f}, 1.0f, false)};
   test::finish(s);
+}
+
+// Bounce light on 2 x 2 blocks (--indirect-scale 2), every light group stored split: the pack's
+// indirect map holds the bounce light, the light map the rest (negative where the indirect map's
+// filter blends across a crease), and every state recomposes like bake_state (max(L + I, 0)).
+TEST(HardCases, IndirectMapHoldsTheBounceLightAndRecomposesLikeBakeState) {
+  Cooked c;
+  two_rooms(c.scene);
   BakeOptions o = draft(true);
   o.indirect_scale = 2;
   PackOptions po;

@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include "lightpatch/platform/egl_context.h"
 #include "lightpatch/runtime.h"
 #include "lightpatch/scene_state.h"
+#include "pack/pack_bytes.h"
 #include "runtime/map_metrics.h"
 #include "sampled_maps.h"
 
@@ -195,6 +198,84 @@ TEST_F(GlesAccuracy, PackWithAnIndirectMapMatchesTheCpuReference) {
   RuntimeLimits cpu;
   cpu.force_cpu_fallback = true;
   run(cpu, "cpu fallback, indirect map", kMaxRelativeRmse, kMaxMedianBias, cooked_indirect_);
+}
+
+// 1-channel patches that draw into one map channel (pack::kFlagDestinationMask: the cooker
+// stores tinted base patches as three of them where atlas alpha planes have room): the room's
+// grey patches edited to draw into R, G or B in turn (the table checksum fixed), on GLES against
+// the CPU reference of the same pack, under the same bars.
+TEST_F(GlesAccuracy, OneChannelDestinationPatchesMatchTheCpuReference) {
+  testing::CookedPack edited;
+  edited.bytes = cooked_->bytes;
+  Error error;
+  ASSERT_EQ(PackView::open(edited.bytes.data(), edited.bytes.size(), &edited.pack, &error),
+            Status::kOk);
+  const uint64_t records =
+      uint64_t(reinterpret_cast<const uint8_t*>(&edited.pack.patch(0)) - edited.bytes.data());
+  uint32_t grey = 0;
+  for (uint32_t p = 0; p < edited.pack.patch_count(); ++p) {
+    if (edited.pack.patch(p).channel_count != 1) continue;
+    const uint8_t flags = uint8_t(edited.pack.patch(p).flags |
+                                  ((grey++ % 4) << pack::kFlagDestinationShift));  // 0: grey
+    edited.bytes[records + p * sizeof(pack::PatchRecord) + offsetof(pack::PatchRecord, flags)] =
+        flags;
+  }
+  test::fix_checksum(edited.bytes.data(), edited.bytes.size());
+  ASSERT_EQ(PackView::open(edited.bytes.data(), edited.bytes.size(), &edited.pack, &error),
+            Status::kOk)
+      << error.message;
+  std::printf("%u grey patches, three in four of them drawing one map channel\n", grey);
+  ASSERT_GT(grey, 8u);
+  run(RuntimeLimits{}, "gpu, one-channel destinations", kMaxRelativeRmse, kMaxMedianBias, &edited);
+}
+
+// Patches touch in the atlas (no gutter), so nothing around a patch may reach a map: the room
+// with an indirect map, every atlas channel-texel no patch covers overwritten with garbage, on
+// the float path, against the CPU reference of the clean pack (and the CPU reference of the
+// garbage pack equal to it bit for bit), over a first build and a run of changes.
+TEST_F(GlesAccuracy, UnusedAtlasTexelsNeverReachTheMap) {
+  const testing::CookedPack& c = *cooked_indirect_;
+  std::vector<uint64_t> words((c.bytes.size() + 7) / 8);
+  uint8_t* copy = reinterpret_cast<uint8_t*>(words.data());
+  std::memcpy(copy, c.bytes.data(), c.bytes.size());
+  const uint64_t filled = test::fill_unused_atlas_texels(c.pack, c.bytes.data(), copy, 11u);
+  std::printf("%llu unused atlas channel-texels filled with garbage\n",
+              static_cast<unsigned long long>(filled));
+  ASSERT_GT(filled, 0u);
+  PackView garbage;
+  Error error;
+  ASSERT_EQ(PackView::open(copy, c.bytes.size(), &garbage, &error), Status::kOk) << error.message;
+  testing::Recomposers r;
+  testing::open_recomposers(garbage, RuntimeLimits{}, &r);
+  ASSERT_FALSE(HasFatalFailure());
+  CpuRecomposer reference;
+  SceneState state;
+  ASSERT_EQ(reference.init(c.pack, &error), Status::kOk);
+  ASSERT_EQ(state.init(c.pack, &error), Status::kOk);
+  for (int step = 0; step <= 2 * int(garbage.object_count() + garbage.light_count()); ++step) {
+    const int k = (step - 1) / 2;  // hide each object, then turn each light off, and back
+    if (step > 0 && k < int(garbage.object_count())) {
+      const uint32_t o = uint32_t(k);
+      ASSERT_EQ(state.set_object_visible(o, step % 2 == 0), Status::kOk);
+      ASSERT_EQ(r.runtime.set_object_visible(o, step % 2 == 0), Status::kOk);
+    } else if (step > 0) {
+      const uint32_t l = uint32_t(k) - garbage.object_count();
+      ASSERT_EQ(state.set_light_on(l, step % 2 == 0), Status::kOk);
+      LightState ls = state.light(l);
+      ASSERT_EQ(r.runtime.set_light(l, ls), Status::kOk);
+    }
+    for (int frame = 0; frame < 100 && !r.runtime.idle(); ++frame)
+      ASSERT_EQ(r.runtime.update(kUnlimited), Status::kOk);
+    ASSERT_EQ(reference.rebuild(state), Status::kOk);
+    ASSERT_EQ(r.cpu.rebuild(state), Status::kOk);
+    const std::vector<float> rgb = testing::read_sampled(r.runtime, garbage);
+    ASSERT_EQ(rgb.size(), size_t(reference.width()) * reference.height() * 3);
+    EXPECT_TRUE(std::equal(reference.rgb(), reference.rgb() + rgb.size(), r.cpu.rgb()))
+        << "step " << step;
+    const MapMetrics m = compare_maps(rgb.data(), reference.rgb(), rgb.size());
+    EXPECT_LE(m.relative_rmse, kMaxRelativeRmse) << "step " << step;
+    EXPECT_LE(std::fabs(m.median_ratio - 1.0), kMaxMedianBias) << "step " << step;
+  }
 }
 
 // Sunlight at real values: a 100,000 lux directional light over a floor with a box, authored

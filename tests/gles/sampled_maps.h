@@ -5,6 +5,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <algorithm>
 
 #include <cstddef>
 #include <vector>
@@ -31,13 +32,15 @@ inline std::vector<float> read_map_set(const Runtime& runtime, const PackView& p
   return rgb;
 }
 
-// L + magnified I from a map set: width * height * 3 values (CpuRecomposer::rgb()'s layout).
+// max(L + magnified I, 0) from a map set: width * height * 3 values (CpuRecomposer::rgb()'s
+// layout).
 inline std::vector<float> sampled_from(const std::vector<float>& maps, const PackView& pack) {
   const size_t light = size_t(pack.lightmap_width()) * pack.lightmap_height() * 3;
   std::vector<float> out(maps.begin(), maps.begin() + std::ptrdiff_t(light));
   if (pack.has_indirect_map()) {
     add_magnified_indirect(maps.data() + light, 3, pack.indirect_width(), pack.indirect_height(),
                            pack.indirect_scale(), out.data(), 3);
+    for (float& v : out) v = std::max(v, 0.0f);  // the game clamps L + I
   }
   return out;
 }

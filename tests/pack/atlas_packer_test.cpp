@@ -1,7 +1,10 @@
-// Atlas packing rules (thesis §4.1.5): sort order, channel filling, growth vs a new atlas, no
-// overlaps, gutters inside the atlas.
+// Atlas packing rules: sort order, channel filling (the alpha plane under 3-channel patches),
+// atlas sides that are multiples of 4 and at most the maximum, full atlases then a last one sized
+// to what is left, no overlaps, and the texels wasted against the lower bound.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <vector>
 
 #include "atlas_packer.h"
@@ -14,94 +17,134 @@ std::vector<PackItem> same(int count, int w, int h, int channels) {
   return std::vector<PackItem>(size_t(count), PackItem{w, h, channels});
 }
 
-TEST(AtlasPacker, FillsAChannelBeforeOpeningTheNext) {
-  // 6x6 patches are 8x8 with their gutter: four per channel of a 16x16 atlas. 16 patches need
-  // all four channels; S_l = 16*64 is not more than 2*S_a = 2*1024, so the atlas does not grow.
-  const AtlasLayout a = pack_atlases(same(16, 6, 6, 1), 64);
-  ASSERT_EQ(a.atlases.size(), 1u);
-  EXPECT_EQ(a.atlases[0].width, 16);
-  EXPECT_EQ(a.atlases[0].height, 16);
-  for (size_t i = 0; i < 16; ++i) EXPECT_EQ(a.placements[i].channel, int(i / 4)) << i;
+int64_t atlas_texels(const AtlasLayout& a) {
+  int64_t t = 0;
+  for (const AtlasSize& s : a.atlases) t += int64_t(s.width) * s.height;
+  return t;
 }
 
-TEST(AtlasPacker, OpensANewAtlasWhenTheRestIsSmall) {
-  // The 17th patch does not fit; S_l = 64 < 2*S_a: a second atlas, not a 4x larger first one.
-  const AtlasLayout a = pack_atlases(same(17, 6, 6, 1), 64);
-  ASSERT_EQ(a.atlases.size(), 2u);
-  EXPECT_EQ(a.atlases[0].width, 16);
-  EXPECT_EQ(a.placements[16].atlas, 1);
-  EXPECT_EQ(a.atlases[1].width, 16);
-  EXPECT_EQ(a.atlases[1].height, 8);  // unused rows trimmed to a power of two
+// Checks that every patch lies inside its atlas, in channels 0..3, and that no two patches share
+// a channel-texel; returns the channel-texels the patches cover.
+int64_t expect_disjoint(const std::vector<PackItem>& items, const AtlasLayout& a, int max_size) {
+  std::vector<std::vector<uint8_t>> used;  // per atlas, per texel: channel bits
+  for (const AtlasSize& sz : a.atlases) {
+    EXPECT_EQ(sz.width % 4, 0);
+    EXPECT_EQ(sz.height % 4, 0);
+    EXPECT_LE(sz.width, max_size);
+    EXPECT_LE(sz.height, max_size);
+    used.emplace_back(size_t(sz.width) * sz.height, 0);
+  }
+  int64_t covered = 0;
+  for (size_t i = 0; i < items.size(); ++i) {
+    const Placement& p = a.placements[i];
+    EXPECT_GE(p.atlas, 0);
+    EXPECT_LT(p.atlas, int(a.atlases.size()));
+    if (p.atlas < 0 || p.atlas >= int(a.atlases.size())) return covered;
+    const AtlasSize& sz = a.atlases[size_t(p.atlas)];
+    EXPECT_GE(p.x, 0);
+    EXPECT_GE(p.y, 0);
+    EXPECT_LE(p.x + items[i].width, sz.width);
+    EXPECT_LE(p.y + items[i].height, sz.height);
+    EXPECT_LE(p.channel + items[i].channels, 4);
+    if (p.x < 0 || p.y < 0 || p.x + items[i].width > sz.width ||
+        p.y + items[i].height > sz.height || p.channel + items[i].channels > 4) {
+      return covered;
+    }
+    const uint8_t bits = uint8_t(((1u << items[i].channels) - 1u) << p.channel);
+    for (int y = p.y; y < p.y + items[i].height; ++y) {
+      for (int x = p.x; x < p.x + items[i].width; ++x) {
+        uint8_t& u = used[size_t(p.atlas)][size_t(y) * sz.width + x];
+        EXPECT_EQ(u & bits, 0) << "item " << i << " overlaps at (" << x << "," << y << ")";
+        u |= bits;
+      }
+    }
+    covered += int64_t(items[i].width) * items[i].height * items[i].channels;
+  }
+  return covered;
 }
 
-TEST(AtlasPacker, GrowsWhenTheRestIsLarge) {
-  // 64 patches: when the 16x16 atlas is full, S_l = 48*64 > 2*S_a = 2048: it doubles to 32x32,
-  // which holds all of them.
-  const AtlasLayout a = pack_atlases(same(64, 6, 6, 1), 64);
-  ASSERT_EQ(a.atlases.size(), 1u);
-  EXPECT_EQ(a.atlases[0].width, 32);
-  EXPECT_EQ(a.atlases[0].height, 32);
-}
-
-TEST(AtlasPacker, StopsGrowingAtTheMaximumSize) {
-  const AtlasLayout a = pack_atlases(same(80, 6, 6, 1), 16);
-  EXPECT_EQ(a.atlases.size(), 5u);
-  for (const AtlasSize& s : a.atlases) EXPECT_LE(s.width, 16);
-}
-
-TEST(AtlasPacker, ThreeChannelPatchesComeFirstAndTakeRgb) {
-  std::vector<PackItem> items = same(3, 6, 6, 1);
-  items.push_back(PackItem{6, 6, 3});
+TEST(AtlasPacker, PatchesTouchAndFillEveryChannel) {
+  // Sixteen 4x4 grey patches: 256 channel-texels, exactly one 8x8 RGBA atlas's worth (or any
+  // other 64-texel shape); no gutter between them.
+  const std::vector<PackItem> items = same(16, 4, 4, 1);
   const AtlasLayout a = pack_atlases(items, 64);
+  ASSERT_EQ(a.atlases.size(), 1u);
+  EXPECT_EQ(atlas_texels(a), 64);
+  EXPECT_EQ(expect_disjoint(items, a, 64), 4 * atlas_texels(a));
+}
+
+TEST(AtlasPacker, GreyPatchesFillTheAlphaPlaneUnderRgbPatches) {
+  // Four 8x8 tinted patches take channels 0-2 of 256 texels; four 8x8 grey ones fit channel 3 of
+  // the same texels: no waste.
+  std::vector<PackItem> items = same(4, 8, 8, 1);
+  for (const PackItem& it : same(4, 8, 8, 3)) items.push_back(it);
+  const AtlasLayout a = pack_atlases(items, 64);
+  ASSERT_EQ(a.atlases.size(), 1u);
+  EXPECT_EQ(atlas_texels(a), 256);
+  EXPECT_EQ(expect_disjoint(items, a, 64), 4 * atlas_texels(a));
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(a.placements[i].channel, 3) << i;
+  for (size_t i = 4; i < 8; ++i) EXPECT_EQ(a.placements[i].channel, 0) << i;
+}
+
+TEST(AtlasPacker, TallestPatchGoesFirst) {
+  const std::vector<PackItem> items = {{2, 2, 1}, {10, 3, 1}, {5, 5, 1}, {4, 4, 3}};
+  const AtlasLayout a = pack_atlases(items, 64);
+  // Tinted patches first (they need three channels of one rectangle), then the grey ones by
+  // height: the 5x5 patch takes the lowest, leftmost place of the alpha plane.
+  EXPECT_EQ(a.placements[3].x, 0);
+  EXPECT_EQ(a.placements[3].y, 0);
   EXPECT_EQ(a.placements[3].channel, 0);
-  EXPECT_EQ(a.placements[3].x, 1);  // placed first: the top-left corner
-  EXPECT_EQ(a.placements[3].y, 1);
-  for (int i = 0; i < 3; ++i)
-    EXPECT_EQ(a.placements[size_t(i)].channel, 0);  // channel 0 still has room
+  EXPECT_EQ(a.placements[2].y, 0);
+  expect_disjoint(items, a, 64);
 }
 
-TEST(AtlasPacker, SortsBySizeDescending) {
-  std::vector<PackItem> items = {{2, 2, 1}, {10, 3, 1}, {5, 5, 1}};
-  const AtlasLayout a = pack_atlases(items, 64);
-  // The largest (max side 10) goes to the top-left corner.
-  EXPECT_EQ(a.placements[1].x, 1);
-  EXPECT_EQ(a.placements[1].y, 1);
+TEST(AtlasPacker, FullAtlasesThenOneSizedToTheRest) {
+  // 100 grey 6x6 patches at a maximum of 16: a 16x16 atlas holds 4 per channel (12x12 used),
+  // so 16 per atlas: six full atlases (trimmed to 12x12) and a smaller seventh for the last 4.
+  const std::vector<PackItem> items = same(100, 6, 6, 1);
+  const AtlasLayout a = pack_atlases(items, 16);
+  ASSERT_EQ(a.atlases.size(), 7u);
+  for (size_t i = 0; i + 1 < a.atlases.size(); ++i) {
+    EXPECT_EQ(a.atlases[i].width, 12) << i;
+    EXPECT_EQ(a.atlases[i].height, 12) << i;
+  }
+  EXPECT_LT(int64_t(a.atlases.back().width) * a.atlases.back().height, 12 * 12);
+  expect_disjoint(items, a, 16);
 }
 
-TEST(AtlasPacker, RandomItemsNeverOverlapAndStayInside) {
+TEST(AtlasPacker, RandomItemsNeverOverlapAndWasteLittle) {
   uint64_t s = 12345;
   auto next = [&](int n) {
     s = s * 6364136223846793005ull + 1442695040888963407ull;
     return int((s >> 33) % uint64_t(n));
   };
-  std::vector<PackItem> items;
-  for (int i = 0; i < 300; ++i)
-    items.push_back(PackItem{1 + next(40), 1 + next(40), next(3) == 0 ? 3 : 1});
-  const AtlasLayout a = pack_atlases(items, 128);
-  std::vector<std::vector<uint8_t>> used;  // per atlas, per texel: channel bits
-  for (const AtlasSize& sz : a.atlases) used.emplace_back(size_t(sz.width) * sz.height, 0);
-  for (size_t i = 0; i < items.size(); ++i) {
-    const Placement& p = a.placements[i];
-    const AtlasSize& sz = a.atlases[size_t(p.atlas)];
-    ASSERT_GE(p.x - 1, 0);
-    ASSERT_GE(p.y - 1, 0);
-    ASSERT_LE(p.x + items[i].width + 1, sz.width);
-    ASSERT_LE(p.y + items[i].height + 1, sz.height);
-    ASSERT_LE(p.channel + items[i].channels, 4);
-    const uint8_t bits = uint8_t(((1u << items[i].channels) - 1u) << p.channel);
-    for (int y = p.y - 1; y < p.y + items[i].height + 1; ++y) {
-      for (int x = p.x - 1; x < p.x + items[i].width + 1; ++x) {
-        uint8_t& u = used[size_t(p.atlas)][size_t(y) * sz.width + x];
-        ASSERT_EQ(u & bits, 0) << "item " << i << " overlaps at (" << x << "," << y << ")";
-        u |= bits;
-      }
+  for (int max_size : {128, 2048}) {
+    std::vector<PackItem> items;
+    int64_t rgb = 0, channel_texels = 0;
+    for (int i = 0; i < 300; ++i) {
+      const PackItem it{1 + next(32), 1 + next(32), next(3) == 0 ? 3 : 1};
+      items.push_back(it);
+      channel_texels += int64_t(it.width) * it.height * it.channels;
+      if (it.channels == 3) rgb += int64_t(it.width) * it.height;
     }
+    const AtlasLayout a = pack_atlases(items, max_size);
+    EXPECT_EQ(expect_disjoint(items, a, max_size), channel_texels);
+    // Against the lower bound (every channel-texel used, or every RGB rectangle apart).
+    const int64_t bound = std::max(rgb, (channel_texels + 3) / 4);
+    const double over = double(atlas_texels(a)) / double(bound) - 1.0;
+    std::printf("max %d: %zu atlases, %.1f %% above the lower bound\n", max_size, a.atlases.size(),
+                100.0 * over);
+    EXPECT_LE(over, 0.08) << "max " << max_size;
   }
 }
 
-TEST(AtlasPacker, RejectsPatchesLargerThanTheMaximum) {
-  EXPECT_THROW(pack_atlases(same(1, 15, 15, 1), 16), CookError);
-  EXPECT_THROW(pack_atlases(same(1, 4, 4, 1), 12), CookError);
+TEST(AtlasPacker, RejectsPatchesLargerThanTheMaximumAndBadMaxima) {
+  EXPECT_NO_THROW(pack_atlases(same(1, 16, 16, 1), 16));
+  EXPECT_THROW(pack_atlases(same(1, 17, 4, 1), 16), CookError);
+  EXPECT_THROW(pack_atlases(same(1, 0, 4, 1), 16), CookError);
+  EXPECT_THROW(pack_atlases(same(1, 4, 4, 2), 16), CookError);
+  EXPECT_THROW(pack_atlases(same(1, 4, 4, 1), 12), CookError);  // below the minimum
+  EXPECT_THROW(pack_atlases(same(1, 4, 4, 1), 18), CookError);  // not a multiple of 4
 }
 
 }  // namespace

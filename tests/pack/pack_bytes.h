@@ -40,4 +40,34 @@ inline void fix_checksum(uint8_t* d, uint64_t size) {
   std::memcpy(d + offsetof(pack::Header, table_checksum), &crc, 4);
 }
 
+// Writes pseudo-random bytes to every atlas channel-texel of `copy` (a byte copy of the pack
+// `v` views) that no patch of `v` covers; returns how many it wrote. The table checksum does not
+// cover atlas data, so the copy stays valid.
+inline uint64_t fill_unused_atlas_texels(const PackView& v, const uint8_t* original, uint8_t* copy,
+                                         uint32_t seed) {
+  uint64_t written = 0;
+  for (uint32_t a = 0; a < v.atlas_count(); ++a) {
+    const pack::AtlasRecord& ar = v.atlas(a);
+    std::vector<uint8_t> used(size_t(ar.width) * ar.height * 4, 0);
+    for (uint32_t i = 0; i < v.patch_count(); ++i) {
+      const pack::PatchRecord& p = v.patch(i);
+      if (p.atlas != a) continue;
+      for (uint32_t y = p.atlas_y; y < uint32_t(p.atlas_y) + p.height; ++y) {
+        for (uint32_t x = p.atlas_x; x < uint32_t(p.atlas_x) + p.width; ++x) {
+          for (uint32_t c = p.channel; c < uint32_t(p.channel) + p.channel_count; ++c)
+            used[(size_t(y) * ar.width + x) * 4 + c] = 1;
+        }
+      }
+    }
+    uint8_t* px = copy + (v.atlas_pixels(a) - original);
+    for (size_t k = 0; k < used.size(); ++k) {
+      if (used[k]) continue;
+      seed = seed * 1664525u + 1013904223u;
+      px[k] = uint8_t(seed >> 24);
+      ++written;
+    }
+  }
+  return written;
+}
+
 }  // namespace lightpatch::test

@@ -1,4 +1,4 @@
-// The committed test packs stay true to the cooker; golden bytes of format version 2; hostile
+// The committed test packs stay true to the cooker; golden bytes of format version 3; hostile
 // packs (truncated, bytes flipped) are refused cleanly or stay safe to use (run under ASan).
 #include <gtest/gtest.h>
 
@@ -22,9 +22,9 @@ namespace {
 using test::Aligned;
 using test::fix_checksum;
 
-// Golden values of tiny.lpk (format version 2).
-constexpr uint64_t kTinySize = 2816;
-constexpr uint32_t kTinyCrc = 0xb20bb73bu;
+// Golden values of tiny.lpk (format version 3).
+constexpr uint64_t kTinySize = 1984;
+constexpr uint32_t kTinyCrc = 0x0b604b46u;
 
 std::string data_path(const std::string& name) {
   return std::string(LIGHTPATCH_TEST_DATA_DIR) + "/packs/" + name;
@@ -53,13 +53,13 @@ TEST(PackFiles, CommittedPacksMatchTheCooker) {
   check_committed("tiny.lpk", test::build_tiny_pack());
 }
 
-TEST(PackFiles, GoldenBytesOfVersion2) {
+TEST(PackFiles, GoldenBytesOfVersion3) {
   const std::vector<uint8_t> b = test::build_tiny_pack();
   ASSERT_GE(b.size(), 64u);
   EXPECT_EQ(std::memcmp(b.data(), "LPK1", 4), 0);
   uint32_t version;
   std::memcpy(&version, b.data() + 4, 4);
-  EXPECT_EQ(version, 2u);
+  EXPECT_EQ(version, 3u);
   uint64_t file_size;
   std::memcpy(&file_size, b.data() + 8, 8);
   EXPECT_EQ(file_size, b.size());
@@ -211,6 +211,41 @@ TEST(PackFiles, MeshScaleAndOffsetAreCheckedOnLoad) {
   EXPECT_TRUE(refused(0, offsetof(pack::MeshRecord, lightmap_scale_offset), &one, 4));
   EXPECT_TRUE(refused(1, offsetof(pack::MeshRecord, lightmap_scale_offset) + 8, &nan, 4));
   EXPECT_FALSE(refused(1, offsetof(pack::MeshRecord, lightmap_scale_offset) + 8, &one, 4));
+}
+
+// Version 3: atlas sides are multiples of 4 (no longer powers of two) up to kMaxAtlasSize; a
+// version 2 pack is refused with a message that says to cook again.
+TEST(PackFiles, AtlasSidesAndVersionAreCheckedOnLoad) {
+  const std::vector<uint8_t> b = test::build_small_pack();
+  Aligned base(b, b.size());
+  PackView v;
+  ASSERT_EQ(PackView::open(base.data(), b.size(), &v, nullptr), Status::kOk);
+  const uint64_t records = uint64_t(reinterpret_cast<const uint8_t*>(&v.atlas(0)) - base.data());
+  auto open_edited = [&](uint64_t at, uint32_t value, Error* e) {
+    Aligned a(b, b.size());
+    std::memcpy(a.data() + at, &value, 4);
+    fix_checksum(a.data(), b.size());
+    PackView w;
+    return PackView::open(a.data(), b.size(), &w, e);
+  };
+  const uint32_t width = v.atlas(0).width, height = v.atlas(0).height;
+  for (const uint32_t bad : {width - 1, width + 2, 0u, 2u, pack::kMaxAtlasSize + 4}) {
+    Error e;
+    EXPECT_EQ(open_edited(records + offsetof(pack::AtlasRecord, width), bad, &e), Status::kCorrupt)
+        << bad;
+    EXPECT_NE(std::string(e.message).find("multiples of 4"), std::string::npos) << e.message;
+    EXPECT_EQ(open_edited(records + offsetof(pack::AtlasRecord, height), bad, &e), Status::kCorrupt)
+        << bad;
+  }
+  // Smaller sides that are multiples of 4 pass the atlas check (and then fail on a patch that
+  // no longer fits, if any), whether or not they are powers of two.
+  Error e;
+  ASSERT_GT(height, 4u);
+  const Status lower = open_edited(records + offsetof(pack::AtlasRecord, height), height - 4, &e);
+  EXPECT_TRUE(lower == Status::kOk || std::string(e.message).find("patch") != std::string::npos)
+      << e.message;
+  EXPECT_EQ(open_edited(offsetof(pack::Header, version), 2u, &e), Status::kUnsupportedVersion);
+  EXPECT_NE(std::string(e.message).find("cook the scene again"), std::string::npos) << e.message;
 }
 
 }  // namespace

@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
+#include <string>
 
 #include "lightpatch/scene_state.h"
 #include "runtime/map_reference.h"
@@ -76,7 +78,8 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
       incremental |= !cpu.stats().rebuilt;
       if (i % 250 != 249) continue;
       // Each presented map, and what a game samples: L + I magnified by the contract's formula.
-      const std::vector<double> maps = testing::presented(reference_map(pack, ref_of(state, pack)));
+      const std::vector<double> maps =
+          testing::presented(pack, reference_map(pack, ref_of(state, pack)));
       for (size_t t = 0; t < maps.size(); ++t) {
         ASSERT_NEAR(cpu.presented_maps()[t], maps[t], 1e-4 * (1.0 + std::fabs(maps[t])))
             << "map-set texel " << t / 3;
@@ -96,7 +99,8 @@ TEST(CpuRecomposer, RebuildAndIncrementalChangesMatchTheReference) {
 //   L + I = 0.2 + 0.2 f + f (40 / 255) clamp((x + 0.5) / 4 - 0.5, 0, 3)
 // at light-map column x (every row alike): the ramp magnified bilinearly is the ramp, flat beyond
 // the outer texel centres.
-TEST(CpuRecomposer, APackWithAnIndirectMapRecomposesToItsClosedForm) {
+// The options of that pack; `tweak` edits each patch record after the common fields.
+SyntheticOptions closed_form_options(std::function<void(pack::PatchRecord&)> tweak = {}) {
   SyntheticOptions o;
   o.width = 16;
   o.height = 8;
@@ -111,7 +115,7 @@ TEST(CpuRecomposer, APackWithAnIndirectMapRecomposesToItsClosedForm) {
   o.atlas_byte = [](uint32_t x, uint32_t y, uint32_t) {
     return uint8_t(y < 16 ? 40 * std::min(x, 3u) : 51);
   };
-  o.mutate = [](pack::Header&, std::vector<pack::PatchRecord>& patches) {
+  o.mutate = [tweak](pack::Header&, std::vector<pack::PatchRecord>& patches) {
     for (pack::PatchRecord& p : patches) {
       const bool indirect = p.target == pack::kTargetIndirectMap;
       p.atlas = 0;
@@ -125,31 +129,47 @@ TEST(CpuRecomposer, APackWithAnIndirectMapRecomposesToItsClosedForm) {
       p.encoding = pack::kEncodingLinear;
       p.scale = 1.0f;
       p.flags = 0;
+      if (tweak) tweak(p);
     }
   };
-  const testing::SyntheticPack bytes = make_synthetic_pack(o);
-  PackView pack;
+  return o;
+}
+
+// Opens the closed-form pack of `o` into *pack, turns its light on at colour (1, 0.5, 0.25),
+// intensity 2 (f = (2, 1, 0.5)) and checks the rebuilt maps: the base drawing 0.2 into the map
+// channels `base` marks, the contribution 0.2 f into those `light` marks, the ramp as above.
+void expect_closed_form(const testing::SyntheticPack& bytes, PackView* pack, SceneState* state,
+                        CpuRecomposer* cpu, const double base[3], const double light[3]) {
   Error error;
-  ASSERT_TRUE(bytes.open(&pack, &error)) << error.message;
-  ASSERT_EQ(pack.patch_count(), 3u);  // base, contribution, its indirect patch
-  SceneState state;
-  ASSERT_EQ(state.init(pack, &error), Status::kOk);
-  CpuRecomposer cpu;
-  ASSERT_EQ(cpu.init(pack, &error), Status::kOk);
-  const LightState light{true, {1.0f, 0.5f, 0.25f}, 2.0f};
-  ASSERT_EQ(state.set_light(0, light), Status::kOk);
-  ASSERT_EQ(cpu.rebuild(state), Status::kOk);
+  ASSERT_TRUE(bytes.open(pack, &error)) << error.message;
+  ASSERT_EQ(pack->patch_count(), 3u);  // base, contribution, its indirect patch
+  ASSERT_EQ(pack->group(0).kind, pack::kGroupBase);
+  ASSERT_EQ(state->init(*pack, &error), Status::kOk);
+  ASSERT_EQ(cpu->init(*pack, &error), Status::kOk);
+  ASSERT_EQ(state->set_light(0, LightState{true, {1.0f, 0.5f, 0.25f}, 2.0f}), Status::kOk);
+  ASSERT_EQ(cpu->rebuild(*state), Status::kOk);
   const double f[3] = {2.0, 1.0, 0.5};
   for (uint32_t y = 0; y < 8; ++y) {
     for (uint32_t x = 0; x < 16; ++x) {
       const double u = std::min(std::max((x + 0.5) / 4.0 - 0.5, 0.0), 3.0);
       for (int c = 0; c < 3; ++c) {
-        const double want = 0.2 + 0.2 * f[c] + f[c] * 40.0 / 255.0 * u;
-        ASSERT_NEAR(cpu.rgb()[(y * 16 + x) * 3 + c], want, 1e-6) << x << "," << y << " c " << c;
-        ASSERT_NEAR(cpu.light_map()[(y * 16 + x) * 3 + c], 0.2 + 0.2 * f[c], 1e-6);
+        const double l = 0.2 * base[c] + 0.2 * f[c] * light[c];
+        ASSERT_NEAR(cpu->light_map()[(y * 16 + x) * 3 + c], l, 1e-6) << x << "," << y << " " << c;
+        ASSERT_NEAR(cpu->rgb()[(y * 16 + x) * 3 + c], l + f[c] * 40.0 / 255.0 * u, 1e-6);
       }
     }
   }
+}
+
+TEST(CpuRecomposer, APackWithAnIndirectMapRecomposesToItsClosedForm) {
+  const testing::SyntheticPack bytes = make_synthetic_pack(closed_form_options());
+  PackView pack;
+  SceneState state;
+  CpuRecomposer cpu;
+  const double all[3] = {1, 1, 1};
+  expect_closed_form(bytes, &pack, &state, &cpu, all, all);
+  ASSERT_FALSE(HasFatalFailure());
+  const double f[3] = {2.0, 1.0, 0.5};
   for (uint32_t i = 0; i < 4 * 2; ++i) {
     for (int c = 0; c < 3; ++c)
       ASSERT_NEAR(cpu.indirect_map()[i * 3 + c], f[c] * 40.0 * (i % 4) / 255.0, 1e-6);
@@ -159,6 +179,34 @@ TEST(CpuRecomposer, APackWithAnIndirectMapRecomposesToItsClosedForm) {
   ASSERT_EQ(cpu.apply(state), Status::kOk);
   for (uint32_t t = 0; t < 16 * 8 * 3; ++t) ASSERT_NEAR(cpu.rgb()[t], 0.2, 1e-6);
   EXPECT_GT(cpu.stats().indirect_texels_drawn, 0u);
+}
+
+// The same pack with its two light-map patches drawing into one map channel each
+// (pack::kFlagDestinationMask): the base into R, the contribution into B; the indirect patch
+// stays grey. So L = (0.2, 0, 0.2 f_B) and I is as above.
+TEST(CpuRecomposer, OneChannelPatchesDrawIntoTheirDestinationChannelOnly) {
+  SyntheticOptions o = closed_form_options([](pack::PatchRecord& p) {
+    if (p.target == pack::kTargetIndirectMap) return;
+    p.channel = 3;
+    const unsigned destination = p.group == 0 ? 1u : 3u;  // R, B
+    p.flags = uint8_t(destination << pack::kFlagDestinationShift);
+  });
+  PackView pack;
+  SceneState state;
+  CpuRecomposer cpu;
+  const double red[3] = {1, 0, 0}, blue[3] = {0, 0, 1};
+  const testing::SyntheticPack bytes = make_synthetic_pack(o);
+  expect_closed_form(bytes, &pack, &state, &cpu, red, blue);
+  Error error;
+  // A destination on a 3-channel patch is refused.
+  o.mutate = [](pack::Header&, std::vector<pack::PatchRecord>& patches) {
+    patches[0].channel_count = 3;
+    patches[0].channel = 0;
+    patches[0].flags = uint8_t(2u << pack::kFlagDestinationShift);
+  };
+  PackView bad;
+  EXPECT_FALSE(make_synthetic_pack(o).open(&bad, &error));
+  EXPECT_NE(std::string(error.message).find("destination"), std::string::npos) << error.message;
 }
 
 TEST(CpuRecomposer, TenThousandIncrementalChangesEndEqualToARebuild) {

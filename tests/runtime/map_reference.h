@@ -60,9 +60,15 @@ inline std::vector<double> reference_map(const PackView& pack, const RefState& s
   return map;
 }
 
-// What the game samples: the map clamped at zero.
-inline std::vector<double> presented(std::vector<double> map) {
-  for (double& v : map) v = std::max(v, 0.0);
+// The presented maps: clamped at zero, except in a pack with an indirect map, whose maps keep
+// their sign (the light map corrects the indirect map; the game clamps L + I: pack_format.h,
+// "Two target maps").
+inline bool presents_signed(const PackView& pack) {
+  return pack.indirect_scale() != 0;
+}
+inline std::vector<double> presented(const PackView& pack, std::vector<double> map) {
+  if (!presents_signed(pack))
+    for (double& v : map) v = std::max(v, 0.0);
   return map;
 }
 
@@ -84,8 +90,8 @@ inline double contract_indirect_at(const double* map, uint32_t w, uint32_t h, ui
          (1 - a) * b * at(u0, v0 + 1) + a * b * at(u0 + 1, v0 + 1);
 }
 
-// What a game samples from a map set (the light map, then the indirect map): L + I per light-map
-// texel, width * height * 3 values.
+// What a game samples from a map set (the light map, then the indirect map): max(L + I, 0) per
+// light-map texel, width * height * 3 values.
 inline std::vector<double> sampled_reference(const PackView& pack,
                                              const std::vector<double>& maps) {
   const uint32_t w = pack.lightmap_width(), h = pack.lightmap_height();
@@ -101,6 +107,7 @@ inline std::vector<double> sampled_reference(const PackView& pack,
       }
     }
   }
+  for (double& v : out) v = std::max(v, 0.0);
   return out;
 }
 
@@ -145,15 +152,14 @@ class CpuMapSink final : public DrawSink {
     check_one_target(first, count);
     for (uint32_t p = first; p < first + count; ++p) {
       for_each_texel(pack_.patch(p), [&](size_t i) {
-        for (int c = 0; c < 3; ++c) presented_[i * 3 + c] = std::max(accumulator_[i * 3 + c], 0.0f);
+        for (int c = 0; c < 3; ++c) presented_[i * 3 + c] = present_value(accumulator_[i * 3 + c]);
       });
     }
     count_texels(first, count);
     ++presents;
   }
   void present_all() override {
-    for (size_t i = 0; i < accumulator_.size(); ++i)
-      presented_[i] = std::max(accumulator_[i], 0.0f);
+    for (size_t i = 0; i < accumulator_.size(); ++i) presented_[i] = present_value(accumulator_[i]);
     texels += pack_.map_texels();
     indirect_texels += indirect_map_texels();
     ++presents;
@@ -167,6 +173,7 @@ class CpuMapSink final : public DrawSink {
   uint32_t draws = 0, presents = 0, whole_presents = 0;
 
  private:
+  float present_value(float v) const { return presents_signed(pack_) ? v : std::max(v, 0.0f); }
   uint64_t indirect_map_texels() const {
     return uint64_t(pack_.indirect_width()) * pack_.indirect_height();
   }

@@ -79,7 +79,8 @@ TEST(Planner, FirstBuildMatchesTheFormulaAndCostsWhatItSaid) {
   EXPECT_EQ(f.sink->texels, predicted);
   EXPECT_EQ(f.planner.stats().texels, predicted);
   EXPECT_EQ(f.sink->presents, 1u);
-  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+  const auto ref =
+      presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
   EXPECT_EQ(f.sink->whole_presents, 1u);
 }
@@ -108,7 +109,8 @@ TEST(Planner, BudgetNeverExceededAndNoPartialStateSampled) {
       }
       if (f.planner.map_ready()) {
         // The sampled map is exactly the presented state: never half of a change.
-        const auto ref = presented(reference_map(f.pack, testing::shown_state(f.planner, f.pack)));
+        const auto ref =
+            presented(f.pack, reference_map(f.pack, testing::shown_state(f.planner, f.pack)));
         ASSERT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3)
             << "seed " << seed << " frame " << frame;
       }
@@ -135,7 +137,8 @@ TEST(Planner, SmallChangeIsIncrementalAndLandsInOneFrame) {
   uint32_t groups = 0;
   for (uint32_t g = 0; g < f.pack.group_count(); ++g) groups += f.pack.group(g).light == 1;
   EXPECT_EQ(f.planner.stats().draws, 2 * groups);
-  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+  const auto ref =
+      presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
 
   // A light change and an object toggle in one frame whose budget is one texel short of both:
@@ -155,7 +158,8 @@ TEST(Planner, SmallChangeIsIncrementalAndLandsInOneFrame) {
   EXPECT_EQ(f.planner.stats().texels, toggle);
   EXPECT_EQ(f.planner.stats().max_latency_frames, 2u);
   EXPECT_EQ(f.sink->whole_presents, presents);
-  const auto ref2 = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+  const auto ref2 =
+      presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref2), 1e-4);
 }
 
@@ -212,7 +216,8 @@ TEST(Planner, CostsAreExactInTheTexelsOfEachTarget) {
   EXPECT_EQ(f.planner.stats().indirect_texels, want.indirect_map);
   EXPECT_EQ(f.sink->indirect_texels - before, want.indirect_map);
   EXPECT_EQ(f.planner.stats().draws, steps);
-  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+  const auto ref =
+      presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
 
   // An object toggle: the split of its groups, as predicted.
@@ -252,7 +257,8 @@ TEST(Planner, ChangesDuringARebuildAreNotLostAndLatencyIsBounded) {
     }
     f.settle(budget);
     ASSERT_TRUE(f.planner.idle());
-    const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+    const auto ref =
+        presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
     EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-3);
     // Bound: a change waits for at most the running rebuild and one more of its own.
     const uint64_t rebuild = f.planner.rebuild_texels();
@@ -269,7 +275,8 @@ TEST(Planner, OversizeStepsRunAloneAndStillFinish) {
   int frames = f.settle(budget);
   EXPECT_TRUE(f.planner.idle());
   EXPECT_GT(frames, 1);
-  const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+  const auto ref =
+      presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
   EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), 1e-4);
 }
 
@@ -294,8 +301,8 @@ void no_drift_on_a_half_float_target(Rounding rounding) {
   }
   EXPECT_GT(f.sink->whole_presents, rebuilds_before + 100);  // the drift bound forced rebuilds
   std::vector<double> magnitude;
-  const auto ref =
-      presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack), &magnitude));
+  const auto ref = presented(
+      f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack), &magnitude));
   const double u = rounding == Rounding::kHalfNearest ? 1.0 / 2048.0 : 1.0 / 1024.0;
   const double bound = f.planner.stats().error_bound;
   const auto& got = f.sink->sampled();
@@ -329,7 +336,8 @@ TEST(Planner, TurningALightOffRebuildsOnATruncatingTargetOnly) {
     f.planner.update(kUnlimited, *f.sink);
     EXPECT_TRUE(f.planner.idle());
     EXPECT_EQ(f.sink->whole_presents - before, r == Rounding::kNone ? 0u : 1u);
-    const auto ref = presented(reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
+    const auto ref =
+        presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)));
     EXPECT_LT(max_abs_diff(f.sink->sampled(), ref), r == Rounding::kNone ? 1e-4 : 0.05);
   }
 }
@@ -367,11 +375,12 @@ TEST(Planner, PresentedMapIsClampedAtZero) {
   ASSERT_LT(*std::min_element(raw.begin(), raw.end()), -1e-3);  // the case exists
   const auto& got = f.sink->sampled();
   EXPECT_GE(*std::min_element(got.begin(), got.end()), 0.0f);
-  EXPECT_LT(max_abs_diff(got, presented(raw)), 1e-4);
+  EXPECT_LT(max_abs_diff(got, presented(f.pack, raw)), 1e-4);
   ASSERT_EQ(f.planner.set_object_visible(0, false), Status::kOk);
   f.planner.update(kUnlimited, *f.sink);
-  EXPECT_LT(max_abs_diff(f.sink->sampled(), presented(reference_map(
-                                                f.pack, testing::wanted_state(f.planner, f.pack)))),
+  EXPECT_LT(max_abs_diff(
+                f.sink->sampled(),
+                presented(f.pack, reference_map(f.pack, testing::wanted_state(f.planner, f.pack)))),
             1e-4);
 }
 

@@ -152,6 +152,9 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
       p.encoding = uniform(0, 1) < 0.5f ? kEncodingSquare : kEncodingLinear;
       p.scale = uniform(0.05f, groups[g].kind == kGroupBase ? 2.0f : 1.0f);
       p.flags = (group_subtracts(groups[g].kind) && uniform(0, 1) < 0.2f) ? kFlagNegative : 0;
+      // A third of the 1-channel patches draw into one map channel only.
+      if (p.channel_count == 1 && uniform(0, 1) < 0.33f)
+        p.flags = uint8_t(p.flags | (integer(1, 3) << kFlagDestinationShift));
       p.group = uint16_t(g);
       patches.push_back(p);
     }

@@ -205,9 +205,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
 
 FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& texels,
                       const Tracer& tracer, const StateSpec& state, const BakeOptions& options,
-                      Progress& progress, Report& report, FloatImage* blocks) {
+                      Progress& progress, Report& report) {
   BakeSession session(scene, layout, texels, tracer, options, progress, report);
-  return session.bake_state(state, progress, report, blocks);
+  return session.bake_state(state, progress, report);
 }
 
 }  // namespace lightpatch::cooker

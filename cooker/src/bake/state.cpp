@@ -10,8 +10,8 @@
 
 namespace lightpatch::cooker {
 
-FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress, Report& report,
-                                   FloatImage* blocks) const {
+FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
+                                   Report& report) const {
   impl_->trace_shared(progress, report);
   const BakeContext& b = impl_->ctx;
   const Scene& scene = b.scene;
@@ -70,7 +70,7 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress, R
         threshold = std::min(threshold, b.lights[li].threshold * max3(radiant[li]));
     }
     const FloatImage direct = out;
-    b.indirect->add_state(direct, visible, threshold, out, blocks);
+    b.indirect->add_state(direct, visible, threshold, out);
     report.stage_time("bake.state_bounce", progress.end());
   }
   report_bake(*impl_, report);

@@ -84,22 +84,17 @@ class GatherIntegrator final : public IndirectIntegrator {
 
   void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const override {
     denoise(op_.grid, preset_.denoise, map);
+    add_magnified(op_.grid, b_.texels, map, fine);
     const int s = b_.layout.align;
-    if (s <= 1) {
-      add_magnified(op_.grid, b_.texels, map, fine);
-      return;
-    }
-    FloatImage image = block_image(op_.grid, b_.texels, s, map);
-    add_block_magnified(image, s, b_.texels, fine);
-    if (blocks) *blocks = std::move(image);
+    if (s > 1 && blocks) *blocks = block_image(op_.grid, b_.texels, s, map);
   }
 
   void add_state(const FloatImage& direct, const std::vector<uint8_t>& present, float threshold,
-                 FloatImage& fine, FloatImage* blocks) const override {
+                 FloatImage& fine) const override {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
     SolveStats st;
     add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st).total(), fine,
-        blocks);
+        nullptr);
     count(st, states_);
   }
 

@@ -57,16 +57,17 @@ class IndirectIntegrator {
   // A cheap bound of the first bounce of change() for objects that block no direct light.
   virtual float first_change(const GroupBounce& group,
                              const std::vector<uint8_t>& present) const = 0;
-  // Adds a bounce map to a fine map (3 channels) as light-map irradiance. With an indirect map
-  // (Layout::align > 1) that is the magnification of its block image (block_image(), what the
-  // pack's indirect map holds), which `blocks` (may be null) receives; otherwise `blocks` is left
-  // as it is.
+  // Adds a bounce map to a fine map (3 channels) as light-map irradiance, magnified along each
+  // surface (never across a crease, a contact or a chart's edge). With an indirect map
+  // (Layout::align > 1) `blocks` (may be null) also receives its block image (block_image(),
+  // what the pack's indirect map holds); the pack's light map then holds the difference, which
+  // may be negative where the indirect map's bilinear filter blends across a crease inside a
+  // chart. Without one `blocks` is left as it is.
   virtual void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const = 0;
   // A whole state's bounce light from its direct light (3 channels) with the objects `present`,
-  // added to `fine` (and its block image to `blocks`, may be null, as add() does).
-  // `threshold`: the finest significance among the state's groups.
+  // added to `fine` as add() does. `threshold`: the finest significance among the state's groups.
   virtual void add_state(const FloatImage& direct, const std::vector<uint8_t>& present,
-                         float threshold, FloatImage& fine, FloatImage* blocks) const = 0;
+                         float threshold, FloatImage& fine) const = 0;
   // Settings and statistics for the report.
   virtual nlohmann::json describe() const = 0;
 };

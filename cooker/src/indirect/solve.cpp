@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lightpatch/indirect_map.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -337,18 +336,6 @@ FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,
     }
   }
   return out;
-}
-
-void add_block_magnified(const FloatImage& blocks, int s, const TexelSet& texels,
-                         FloatImage& fine) {
-  for (int y = 0; y < blocks.height * s; ++y)
-    for (int x = 0; x < blocks.width * s; ++x) {
-      if (!texels.valid[texels.index(x, y)]) continue;
-      float v[3];
-      sample_indirect(blocks.data.data(), 3, uint32_t(blocks.width), uint32_t(blocks.height),
-                      uint32_t(s), uint32_t(x), uint32_t(y), v);
-      for (int ch = 0; ch < 3; ++ch) fine.at(x, y, ch) += v[ch];
-    }
 }
 
 void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,

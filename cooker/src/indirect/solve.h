@@ -102,12 +102,9 @@ void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseM
 // pack_format.h "Two target maps"): each block holds the mean, over its valid texels, of their
 // coarse texels' values; a block with none (a chart's ring) the mean of its filled 8-neighbours
 // in the same region (any region for a block outside every region), two rings out, so that
-// magnifying at a chart's edge reads that chart's own light. (width / s) x (height / s) blocks, 3 channels. Linear in the map.
+// magnifying at a chart's edge reads that chart's own light. (width / s) x (height / s) blocks,
+// 3 channels. Linear in the map.
 FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s, const CoarseMap& map);
-
-// Adds the block image, magnified exactly as the runtime magnifies the indirect map
-// (lightpatch/indirect_map.h), to the valid texels of `fine` (3 channels).
-void add_block_magnified(const FloatImage& blocks, int s, const TexelSet& texels, FloatImage& fine);
 
 // Largest component of any coarse value.
 float peak(const CoarseMap& map);

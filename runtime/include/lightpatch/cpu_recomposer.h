@@ -9,9 +9,9 @@
 // the accumulator rounded to float and clamped at zero (light is never negative; planner.h says
 // why quantization can leave a few steps below zero under a visible object). A pack with an
 // indirect map has a second accumulator and presented map at its own resolution
-// (indirect_map()), and rgb() is what a game lights with: the light map plus the indirect map
-// magnified bilinearly (indirect_map.h), computed after each rebuild()/apply(); without an
-// indirect map rgb() is the light map itself.
+// (indirect_map()); both are presented signed (PackView::presents_signed()), and rgb() is what a
+// game lights with: max(L + I, 0), the indirect map magnified bilinearly (indirect_map.h),
+// computed after each rebuild()/apply(); without an indirect map rgb() is the light map itself.
 //
 // Memory: everything is allocated in init(); rebuild() and apply() allocate nothing. The pack's
 // bytes must outlive the recomposer.

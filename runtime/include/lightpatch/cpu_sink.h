@@ -1,7 +1,8 @@
 // Executes the planner's steps on the CPU: a double-precision RGB accumulator and a presented map,
 // either linear float RGB (the CPU reference recomposer) or half-float RGBA rounded to nearest
-// (the runtime's CPU path, uploaded as the texture the game samples). Presenting clamps at zero
-// and multiplies by the presentation scale (planner.h, runtime.h).
+// (the runtime's CPU path, uploaded as the texture the game samples). Presenting multiplies by the
+// presentation scale and clamps at zero, except for a pack whose maps are presented signed
+// (PackView::presents_signed(): the game clamps L + I) (planner.h, runtime.h).
 //
 // Both targets: the buffers hold the pack's map set (pack_view.h: the light map, then the indirect
 // map where the pack has one), so a pack with an indirect map has two accumulators and two

@@ -1,4 +1,4 @@
-// lightpatch pack format, version 2: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 3: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -30,6 +30,8 @@
 //   v = scale * x           (kEncodingLinear)
 //   v = scale * x * x       (kEncodingSquare: sqrt-encoded darks keep precision)
 //   value = kFlagNegative ? -v : v
+// A 3-channel patch adds its three values to the map's R, G, B; a 1-channel patch adds its value
+// to all three (grey) or to the one channel its flags name (patch_destination()).
 // Values are irradiance in the lights' units (W/m^2-like "lux" for intensity 1 of the owning
 // light for contribution/shadow/correction patches; absolute for base patches).
 //
@@ -46,6 +48,9 @@
 // indirect-texel coordinates ((x + 0.5) / s - 0.5, (y + 0.5) / s - 0.5). The cooker lays charts
 // out on s x s blocks with a ring of blocks of their own, so that interpolation never mixes two
 // charts; the light map holds what the indirect map cannot (direct light, sharp bounce detail).
+// The bilinear filter still blends across a crease or a contact inside a chart (a wall and the
+// floor it is unwrapped with), so the light map may be negative there: it holds the map less the
+// magnified indirect map. Neither map is clamped on its own; a game lights with max(L + I, 0).
 #pragma once
 
 #include <cstddef>
@@ -55,11 +60,15 @@ namespace lightpatch::pack {
 
 constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 'L','P','K','1'
 // Version 2: MeshRecord grew to 64 bytes with flags and each mesh instance's light-map scale and
-// offset (kMeshFlagTexcoord1).
-constexpr uint32_t kVersion = 2;
+// offset (kMeshFlagTexcoord1). Version 3: atlas sides are multiples of kAtlasAlign, no longer
+// powers of two (a version 2 reader would call such a pack corrupt), and patches touch in the
+// atlas (no gutter); a 1-channel patch may draw into one map channel (kFlagDestinationMask). A
+// reader accepts its own version only.
+constexpr uint32_t kVersion = 3;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
+constexpr uint32_t kAtlasAlign = 4;  // atlas sides are multiples of this (4x4 compression blocks)
 constexpr uint32_t kMaxLightmapSize = 16384;
 
 enum SectionType : uint32_t {
@@ -174,7 +183,17 @@ enum PatchEncoding : uint8_t { kEncodingLinear = 0, kEncodingSquare = 1 };
 enum PatchTarget : uint8_t { kTargetLightMap = 0, kTargetIndirectMap = 1 };
 enum PatchFlags : uint8_t {
   kFlagNegative = 1u << 0,  // decoded values are subtracted from (added with sign -1 to) the map
+  // Bits 1-2, 1-channel patches only: 0 (grey) adds the value to the map's R, G and B; 1, 2 or 3
+  // adds it to R, G or B only (one channel of a tinted patch stored apart, so that it can fill an
+  // atlas's alpha plane, which 3-channel patches leave to 1-channel ones).
+  kFlagDestinationMask = 3u << 1,
 };
+constexpr unsigned kFlagDestinationShift = 1;
+
+// The one map channel a patch draws into (0, 1 or 2), or -1 for all three.
+constexpr int patch_destination(uint8_t flags) {
+  return int((flags & kFlagDestinationMask) >> kFlagDestinationShift) - 1;
+}
 
 // One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of its target
 // map (the light map, or the indirect map). Rectangles are in texels of that map with the origin
@@ -186,7 +205,7 @@ struct PatchRecord {
   uint16_t dest_x, dest_y;    // top-left texel in the target map
   uint8_t atlas;              // atlas index
   uint8_t channel;            // first atlas channel (0=R .. 3=A)
-  uint8_t channel_count;  // 1 (grey: same value in R,G,B of the map) or 3 (RGB from channel..+2)
+  uint8_t channel_count;  // 1 (grey, or one map channel: PatchFlags) or 3 (RGB from channel..+2)
   uint8_t encoding;       // PatchEncoding
   float scale;            // finite, > 0
   uint8_t flags;          // PatchFlags
@@ -200,9 +219,13 @@ static_assert(offsetof(PatchRecord, scale) == 16);
 static_assert(offsetof(PatchRecord, flags) == 20);
 static_assert(offsetof(PatchRecord, group) == 22);
 
+// An atlas: any size whose sides are multiples of kAtlasAlign (GLES 3.0 textures need not be
+// powers of two; the runtime reads them with texelFetch only). Patches may touch: a texel belongs
+// to at most one patch per channel, and a reader reads a patch's own rectangle only, so texels no
+// patch covers (zero as the cooker writes them) never reach a map.
 struct AtlasRecord {
-  uint32_t width;        // texels, power of two, <= kMaxAtlasSize
-  uint32_t height;       // texels, power of two, <= kMaxAtlasSize
+  uint32_t width;        // texels, a multiple of kAtlasAlign in kAtlasAlign..kMaxAtlasSize
+  uint32_t height;       // texels, a multiple of kAtlasAlign in kAtlasAlign..kMaxAtlasSize
   uint64_t data_offset;  // from file start, inside kAtlasData, multiple of kSectionAlignment
                          // width*height*4 bytes of RGBA8, rows top to bottom, tightly packed
 };

@@ -76,6 +76,9 @@ class PackView {
   // each axis (0: none), and its size in texels (0 x 0 without one).
   bool has_indirect_map() const { return header_->indirect_scale != 0; }
   uint32_t indirect_scale() const { return header_->indirect_scale; }
+  // Whether the presented maps keep their sign (pack_format.h, "Two target maps": with an
+  // indirect map the light map corrects it, so only L + I is clamped at zero, by the game).
+  bool presents_signed() const { return has_indirect_map(); }
   uint32_t indirect_width() const {
     return has_indirect_map() ? header_->lightmap_width / header_->indirect_scale : 0;
   }

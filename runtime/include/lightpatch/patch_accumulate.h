@@ -17,7 +17,8 @@ namespace lightpatch {
 // `maps`: the pack's map set (pack_view.h: the light map, then the indirect map if the pack has
 // one; RGB, 3 values per texel, row 0 = top), each patch into its own target. With `absolute`,
 // adds |factor * value| (magnitude bounds). A grey patch (one channel) adds its value to all three
-// channels. The patches must be valid indices of a validated pack.
+// channels, or to its one destination channel (pack::patch_destination). The patches must be
+// valid indices of a validated pack.
 template <typename T>
 void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T factor[3], T* maps,
                  bool absolute = false) {
@@ -37,6 +38,16 @@ void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T f
     T f[3];
     for (int c = 0; c < 3; ++c) f[c] = absolute ? T(std::fabs(factor[c])) : factor[c];
     const uint32_t step = p.channel_count == 3 ? 1 : 0;
+    const int destination = pack::patch_destination(p.flags);
+    if (destination >= 0) {
+      const T fd = f[destination];
+      for (uint32_t y = 0; y < p.height; ++y) {
+        const uint8_t* src = pixels + ((size_t(p.atlas_y) + y) * aw + p.atlas_x) * 4 + p.channel;
+        T* dst = map + ((size_t(p.dest_y) + y) * w + p.dest_x) * 3 + destination;
+        for (uint32_t x = 0; x < p.width; ++x, src += 4, dst += 3) *dst += fd * table[*src];
+      }
+      continue;
+    }
     for (uint32_t y = 0; y < p.height; ++y) {
       const uint8_t* src = pixels + ((size_t(p.atlas_y) + y) * aw + p.atlas_x) * 4 + p.channel;
       T* dst = map + ((size_t(p.dest_y) + y) * w + p.dest_x) * 3;

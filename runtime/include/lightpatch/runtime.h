@@ -6,7 +6,7 @@
 // Packs with an indirect map (PackView::has_indirect_map(): bounce light at 1/2, 1/4 or 1/8 of
 // the light map's resolution per axis) have a second sampled map, indirect_map_texture(), with
 // its own accumulator; the game lights a surface at light-map UV (u, v) with
-//   (texture(light_map, uv) + texture(indirect_map, uv)) * light_map_scale()
+//   max(texture(light_map, uv) + texture(indirect_map, uv), 0) * light_map_scale()
 // both sampled with the textures' own bilinear filtering (pack_format.h, "Two target maps"; the
 // indirect texture clamps at its edges). Without one, indirect_map_texture() is 0.
 //
@@ -31,7 +31,9 @@
 //    uploaded (glTexSubImage2D) after each frame that presented something.
 //
 // The sampled map holds, per channel, max(L, 0) / light_map_scale() rounded to the nearest half
-// float (ties to even) on every path (and the indirect map max(I, 0) / light_map_scale() alike).
+// float (ties to even) on every path. With an indirect map both maps keep their sign, L and I
+// alike: the light map corrects the indirect map's filter where it blends across a crease, so it
+// may be negative there, and the game clamps the sum: max(L + I, 0) * light_map_scale().
 // Light is never negative: the 8-bit quantization of B, C and S does not cancel exactly where a
 // visible object removes all of a light, and leaves a few quantization steps of either sign there
 // (planner.h); presenting clamps the negative ones at 0. light_map_scale() is a power of two chosen

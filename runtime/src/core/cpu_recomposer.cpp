@@ -66,6 +66,9 @@ Status CpuRecomposer::settle() {
     std::memcpy(combined_, rgb_, sizeof(float) * width_ * height_ * 3);
     add_magnified_indirect(indirect_map(), 3, pack_.indirect_width(), pack_.indirect_height(),
                            pack_.indirect_scale(), combined_, 3);
+    // What a game lights with: max(L + I, 0) (pack_format.h, "Two target maps").
+    for (size_t i = 0; i < size_t(width_) * height_ * 3; ++i)
+      combined_[i] = combined_[i] > 0.0f ? combined_[i] : 0.0f;
   }
   return planner_.idle() ? Status::kOk : Status::kInvalidArgument;
 }

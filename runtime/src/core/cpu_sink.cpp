@@ -34,12 +34,14 @@ void CpuSink::present_rect(uint8_t target, uint32_t x0, uint32_t y0, uint32_t wi
                            uint32_t height) {
   const uint32_t w = pack_->map_width(target);
   const size_t base = size_t(pack_->map_offset(target));  // the target's first texel
+  const bool keep_sign = pack_->presents_signed();
   for (uint32_t y = y0; y < y0 + height; ++y) {
     const size_t row = base + size_t(y) * w + x0;
     const double* src = accumulator_ + row * 3;
     for (uint32_t x = 0; x < width; ++x) {
       for (uint32_t c = 0; c < 3; ++c) {
-        const double v = src[x * 3 + c] > 0.0 ? src[x * 3 + c] * scale_ : 0.0;
+        const double a = src[x * 3 + c];
+        const double v = keep_sign || a > 0.0 ? a * scale_ : 0.0;
         if (rgb_) {
           rgb_[(row + x) * 3 + c] = float(v);
         } else {

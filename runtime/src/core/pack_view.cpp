@@ -72,8 +72,8 @@ bool range_inside(uint64_t offset, uint64_t length, uint64_t begin, uint64_t siz
   return rel <= size && length <= size - rel;
 }
 
-bool is_pow2(uint32_t v) {
-  return v != 0 && (v & (v - 1)) == 0;
+bool atlas_side_ok(uint32_t v) {
+  return v >= kAtlasAlign && v <= kMaxAtlasSize && v % kAtlasAlign == 0;
 }
 
 bool finite_non_negative(float v) {
@@ -174,7 +174,8 @@ Status Validator::run(Parsed* out) {
   const Header& h = *at<Header>(0);
   if (h.magic != kMagic) return fail(Status::kBadMagic, "bad magic: not a lightpatch pack");
   if (h.version != kVersion) {
-    return fail(Status::kUnsupportedVersion, "format version %u is not supported (this reader: %u)",
+    return fail(Status::kUnsupportedVersion,
+                "format version %u is not supported (this reader: %u); cook the scene again",
                 h.version, kVersion);
   }
   if (h.file_size != size_) {
@@ -339,10 +340,9 @@ Status Validator::run(Parsed* out) {
   const Section& atlas_data = sections_[kSectionAtlasData];
   for (uint32_t i = 0; i < h.atlas_count; ++i) {
     const AtlasRecord& a = atlases[i];
-    if (!is_pow2(a.width) || !is_pow2(a.height) || a.width > kMaxAtlasSize ||
-        a.height > kMaxAtlasSize) {
-      return fail(Status::kCorrupt, "atlas %u: size %ux%u is not a power of two up to %u", i,
-                  a.width, a.height, kMaxAtlasSize);
+    if (!atlas_side_ok(a.width) || !atlas_side_ok(a.height)) {
+      return fail(Status::kCorrupt, "atlas %u: size %ux%u: sides must be multiples of %u up to %u",
+                  i, a.width, a.height, kAtlasAlign, kMaxAtlasSize);
     }
     if (a.data_offset % kSectionAlignment != 0) {
       return fail(Status::kCorrupt, "atlas %u: data offset %llu not a multiple of %u", i,
@@ -463,8 +463,12 @@ Status Validator::run(Parsed* out) {
     if (!std::isfinite(p.scale) || !(p.scale > 0.0f)) {
       return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
     }
-    if ((p.flags & ~uint32_t(kFlagNegative)) != 0) {
+    if ((p.flags & ~uint32_t(kFlagNegative | kFlagDestinationMask)) != 0) {
       return fail(Status::kCorrupt, "patch %u: unknown flags %02x", i, p.flags);
+    }
+    if (patch_destination(p.flags) >= 0 && p.channel_count != 1) {
+      return fail(Status::kCorrupt, "patch %u: a destination channel on a %u-channel patch", i,
+                  p.channel_count);
     }
   }
 

@@ -408,6 +408,7 @@ Status Runtime::create_programs(Error* error) {
   // The float accumulator holds irradiance; the half one holds it scaled already.
   glUniform1f(glGetUniformLocation(present_program_, "u_scale"),
               path_ == RecomposePath::kGpuFloat ? inverse_scale_ : 1.0f);
+  glUniform1i(glGetUniformLocation(present_program_, "u_signed"), pack_.presents_signed() ? 1 : 0);
   glUseProgram(0);
   return Status::kOk;
 }
@@ -436,7 +437,8 @@ Status Runtime::create_buffers(Error* error) {
       ax0 = p.atlas_x, ay0 = p.atlas_y, ax1 = ax0 + p.width, ay1 = ay0 + p.height;
       params[0] = p.scale * patch_sign(pack_.group(p.group).kind, p.flags);
       params[1] = p.channel;
-      params[2] = p.channel_count;
+      const int destination = pack::patch_destination(p.flags);
+      params[2] = destination >= 0 ? 4.0f + float(destination) : float(p.channel_count);
       params[3] = p.encoding == pack::kEncodingSquare ? 1.0f : 0.0f;
       unit = float(p.atlas % kUnits);
     } else {  // a full-target quad, sampling atlas 0 stretched over it (fill-rate floor)

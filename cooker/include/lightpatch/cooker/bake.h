@@ -113,10 +113,8 @@ class BakeSession {
   // The groups' maps as one BakedMaps, in plan order (every group exactly once).
   BakedMaps assemble(std::vector<GroupBake> groups, Report& report) const;
   // One state baked directly (3 channels): every light at its state, the visible objects
-  // present, their bounce light included. `blocks` (may be null) receives its bounce light's
-  // block image when the layout has blocks (BakedMaps), for finalize_map.
-  FloatImage bake_state(const StateSpec& state, Progress& progress, Report& report,
-                        FloatImage* blocks = nullptr) const;
+  // present, their bounce light included.
+  FloatImage bake_state(const StateSpec& state, Progress& progress, Report& report) const;
 
   struct Impl;  // the session's state (src/bake/session.h)
   const Impl& impl() const;
@@ -136,6 +134,6 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
 // Throws CookError on names in `state` that the scene does not have.
 FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& texels,
                       const Tracer& tracer, const StateSpec& state, const BakeOptions& options,
-                      Progress& progress, Report& report, FloatImage* blocks = nullptr);
+                      Progress& progress, Report& report);
 
 }  // namespace lightpatch::cooker

@@ -58,10 +58,12 @@ struct BakedMaps {
   FloatImage base;                       // B, 3 channels
   std::vector<int> lights;               // Scene::lights index of each semi-dynamic light
   std::vector<FloatImage> contribution;  // C_l, parallel to lights
-  // Bounce light on blocks (Layout::align > 1, pack_format.h "Two target maps"): every map above
-  // and below holds its bounce part magnified from a block image, (width / align) x
-  // (height / align) x 3, which the pack stores as the map's indirect part (its light-map part
-  // is the rest). Empty images where a map has no bounce part or the layout has no blocks.
+  // Bounce light on blocks (Layout::align > 1, pack_format.h "Two target maps"): the block image
+  // of every map's bounce part, (width / align) x (height / align) x 3, which the pack stores as
+  // the map's indirect part; its light-map part is the rest, the map less the block image's
+  // magnification (signed: the maps' bounce light follows each surface, the magnification blends
+  // across creases inside a chart). Empty images where a map has no bounce part or the layout has
+  // no blocks.
   FloatImage base_indirect;
   std::vector<FloatImage> contribution_indirect;    // parallel to contribution
   std::vector<ShadowMap> shadows;                   // kept pairs only

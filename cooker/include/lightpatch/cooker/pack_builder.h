@@ -17,9 +17,9 @@ namespace lightpatch::cooker {
 enum class EncodingPolicy { kAuto, kLinear, kSquare };
 
 struct PackOptions {
-  int max_atlas_size = 2048;  // power of two
-  // Largest patch side (texels). Smaller tiles skip more empty light map but add gutters and
-  // records; 32 gave the fewest atlas bytes per scene in our measurements (README, Numbers).
+  int max_atlas_size = 2048;  // a multiple of pack::kAtlasAlign
+  // Largest patch side (texels). Smaller tiles skip more empty light map but add records; 32 gave
+  // the fewest atlas bytes per scene in our measurements (README, Numbers).
   int tile_size = 32;
   EncodingPolicy encoding = EncodingPolicy::kAuto;
   // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step
@@ -28,6 +28,9 @@ struct PackOptions {
   // Store every light group that has an indirect part split into its indirect-map and light-map
   // parts, whatever it costs (otherwise chosen per light group by atlas texels).
   bool always_split = false;
+  // Store tinted patches of the groups without a light as three 1-channel patches where the
+  // atlases' alpha planes have room for them (pack_builder.cpp, split_for_alpha).
+  bool fill_alpha = true;
 };
 
 // Builds the pack bytes. Statistics and the encoding decision go into `report`.

@@ -23,14 +23,6 @@ TexelSet build_texels(const Scene& scene, const Layout& layout, const Tracer* tr
 void finalize_map(FloatImage& map, const Scene& scene, const Layout& layout,
                   const TexelSet& texels);
 
-// The same for a map whose bounce part is magnified from a block image (BakedMaps::
-// base_indirect, ...; empty: finalize_map above): its direct part, the map less the magnified
-// blocks at the valid texels, is finalized, and the magnified blocks added back at every texel.
-// So the bounce light is the smooth magnification wherever the runtime filters (what the pack's
-// indirect map gives), and the pack's light-map part is the finalized direct light alone.
-void finalize_map(FloatImage& map, const FloatImage& blocks, const Scene& scene,
-                  const Layout& layout, const TexelSet& texels);
-
 // finalize_map() on every map the bake made: base, contributions, shadows, pair corrections and
 // static shadows (every map the pack recombines). `progress` (may be null) advances per map.
 void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
