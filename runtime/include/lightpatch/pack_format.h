@@ -20,6 +20,10 @@
 //   kStrings     (required) UTF-8 names, not NUL-terminated, referenced by offset/length
 //   kMeshes      (optional) MeshRecord[mesh_count]            light-map UVs of the baked meshes
 //   kMeshData    (optional) MeshVertex[] and uint32 indices referenced by MeshRecord
+//   kProbes      (optional) ProbeRecord[probe_count]           light probes (see below)
+//   kProbeGrid   (optional, with kProbes) ProbeGridRecord, then uint32 probe index per grid point
+//   kProbeSets   (with kProbes) ProbeSetRecord[]               contiguous entry ranges per owner
+//   kProbeEntries (with kProbes) ProbeEntry[]                  sorted by set
 //
 // Table checksum: CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320) over the bytes of the section
 // index and of every section except kAtlasData and kMeshData, in index order, with the header's
@@ -51,6 +55,22 @@
 // The bilinear filter still blends across a crease or a contact inside a chart (a wall and the
 // floor it is unwrapped with), so the light map may be negative there: it holds the map less the
 // magnified indirect map. Neither map is clamped on its own; a game lights with max(L + I, 0).
+//
+// Light probes: points in the free space of the scene where moving things (a character, a carried
+// object) take their light. Each probe holds, per owner exactly as the map's groups do (base,
+// a light's contribution, a light's shadow of an object, an object's static shadow), the
+// irradiance that owner brings to the probe as order-2 spherical harmonics (9 coefficients per
+// channel), so a probe follows the state by the same sum as the light map:
+//   E(n) = sum_sets sign(kind) * factor * sum_k sh[k] * Y_k(n),   lit with max(E(n), 0)
+// (group_rules.h: the sign, the factor f_l or 1, when the state draws a set). Pair corrections
+// have no probe sets. Y_k is the real SH basis in the order Y00, Y1-1, Y10, Y11, Y2-2, Y2-1, Y20,
+// Y21, Y22 of the unit direction n = (x, y, z) in world space (glTF: +Y up):
+//   0.282095; 0.488603 y, 0.488603 z, 0.488603 x; 1.092548 xy, 1.092548 yz,
+//   0.315392 (3z^2 - 1), 1.092548 xz, 0.546274 (x^2 - y^2)
+// and the coefficients already include the cosine lobe's convolution, so E(n) is the irradiance
+// of a surface facing n (same units as the patches). Probes on a regular grid (kProbeGrid) are
+// blended trilinearly, leaving out a corner the query point cannot reach along the axes within
+// the probe's reach (a wall between them).
 #pragma once
 
 #include <cstddef>
@@ -62,9 +82,9 @@ constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 
 // Version 2: MeshRecord grew to 64 bytes with flags and each mesh instance's light-map scale and
 // offset (kMeshFlagTexcoord1). Version 3: atlas sides are multiples of kAtlasAlign, no longer
 // powers of two (a version 2 reader would call such a pack corrupt), and patches touch in the
-// atlas (no gutter); a 1-channel patch may draw into one map channel (kFlagDestinationMask). A
-// reader accepts its own version only.
-constexpr uint32_t kVersion = 3;
+// atlas (no gutter); a 1-channel patch may draw into one map channel (kFlagDestinationMask).
+// Version 4: light probes (sections 10-13). A reader accepts its own version only.
+constexpr uint32_t kVersion = 4;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
@@ -81,8 +101,12 @@ enum SectionType : uint32_t {
   kSectionStrings = 7,
   kSectionMeshes = 8,
   kSectionMeshData = 9,
+  kSectionProbes = 10,
+  kSectionProbeGrid = 11,
+  kSectionProbeSets = 12,
+  kSectionProbeEntries = 13,
 };
-constexpr uint32_t kSectionTypeMax = 9;
+constexpr uint32_t kSectionTypeMax = 13;
 
 struct Header {
   uint32_t magic;            // kMagic
@@ -270,5 +294,64 @@ struct MeshVertex {
   float u, v;              // light-map UV in [0,1], glTF convention (v = 0 at the top row)
 };
 static_assert(sizeof(MeshVertex) == 12);
+
+constexpr uint32_t kNone32 = 0xFFFFFFFFu;  // "no probe" in a grid cell
+constexpr uint32_t kProbeShCount = 9;      // SH coefficients per channel (order 2)
+constexpr uint32_t kMaxProbes = 1u << 20;
+constexpr uint32_t kMaxProbeGridPoints = 1u << 22;
+
+// One light probe. Grid probes have no name (name_length 0); probes placed by the scene (a node
+// with extras "lightProbe": true) carry their node's name and may also sit on the grid.
+struct ProbeRecord {
+  float position[3];  // world space, metres, finite
+  // Free distance from the probe along +X, -X, +Y, -Y, +Z, -Z to the nearest static surface,
+  // capped at the grid spacing (metres, finite, >= 0): a grid query leaves the probe out when the
+  // point is farther from it than this along an axis.
+  float reach[6];
+  uint32_t name_offset;  // into kStrings (0 when unnamed)
+  uint32_t name_length;  // bytes; 0 for an unnamed probe
+  uint32_t reserved;     // 0
+};
+static_assert(sizeof(ProbeRecord) == 48);
+static_assert(offsetof(ProbeRecord, reach) == 12);
+static_assert(offsetof(ProbeRecord, name_offset) == 36);
+
+// The probe grid: point (i, j, k) lies at origin + spacing * (i, j, k), i < size[0] fastest. The
+// section holds this record and then size[0] * size[1] * size[2] uint32 probe indices (kNone32
+// where no probe is: inside geometry, or where nothing moves). A point between grid points blends
+// the 8 corners of its cell; outside the grid it takes the nearest cell.
+struct ProbeGridRecord {
+  float origin[3];   // world space, metres, finite
+  float spacing;     // metres, finite, > 0
+  uint32_t size[3];  // grid points per axis, each >= 1, product <= kMaxProbeGridPoints
+  uint32_t reserved;  // 0
+};
+static_assert(sizeof(ProbeGridRecord) == 32);
+static_assert(offsetof(ProbeGridRecord, size) == 16);
+
+// A contiguous range of probe entries with one owner, keyed like GroupRecord (kind base,
+// contribution, shadow or static shadow; never pair correction). Sorted by (kind, light,
+// object_a, object_b); at most one set per owner; every entry belongs to exactly one set.
+struct ProbeSetRecord {
+  uint16_t kind;         // GroupKind, not kGroupPairCorrection
+  uint16_t light;        // light index or kNone16, as GroupRecord
+  uint16_t object_a;     // object index or kNone16, as GroupRecord
+  uint16_t object_b;     // kNone16
+  uint32_t first_entry;  // index into kProbeEntries
+  uint32_t entry_count;  // >= 1
+};
+static_assert(sizeof(ProbeSetRecord) == 16);
+static_assert(offsetof(ProbeSetRecord, first_entry) == 8);
+
+// What one set brings to one probe: irradiance SH coefficients sh[k * 3 + c] for basis function
+// k (order above) and channel c (R, G, B), finite, in the set's units (for intensity 1 of the
+// owning light, colour (1,1,1), like contribution patches; absolute for base and static shadow).
+// Within a set, entries are sorted by probe, each probe at most once.
+struct ProbeEntry {
+  uint32_t probe;  // index into kProbes
+  float sh[kProbeShCount * 3];
+};
+static_assert(sizeof(ProbeEntry) == 112);
+static_assert(offsetof(ProbeEntry, sh) == 4);
 
 }  // namespace lightpatch::pack
