@@ -1,0 +1,59 @@
+// Semi-dynamic light probes (pack_format.h, "Light probes"): points in the free space of the
+// scene, placed on a grid trimmed to where moving things can be plus the probes the scene places
+// (a node with extras "lightProbe": true), each lit per owner exactly like the maps (base, a
+// light's contribution, a light's shadow of an object, an object's static shadow), as order-2
+// irradiance SH. The maps of every group, finalized, are the radiance cache a probe gathers from:
+// a probe's value for a set is the direct light of the set's light(s) at the probe plus the light
+// its surfaces reflect towards it (albedo / pi times the set's map at the surface seen).
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/progress.h"
+#include "lightpatch/cooker/report.h"
+#include "lightpatch/cooker/scene.h"
+#include "lightpatch/cooker/texels.h"
+#include "lightpatch/cooker/tracer.h"
+#include "lightpatch/pack_format.h"
+
+namespace lightpatch::cooker {
+
+struct ProbeOptions {
+  bool enabled = true;
+  // Grid spacing in metres; 0 = auto (1 m, coarser where the scene's bounds would need more than
+  // kMaxAutoGridPoints grid points).
+  float spacing = 0.0f;
+  int rays = 0;  // gather rays per probe; 0 = the preset (draft 256, preview 512, production 1024)
+  uint64_t seed = 1;
+  int threads = 0;  // 0 = all cores
+};
+constexpr uint32_t kMaxAutoGridPoints = 65536;
+
+struct ProbeBake {
+  struct Probe {
+    glm::vec3 position{0.0f};
+    float reach[6] = {0, 0, 0, 0, 0, 0};  // +X, -X, +Y, -Y, +Z, -Z (pack::ProbeRecord)
+    std::string name;                     // node name of a placed probe, empty on the grid
+  };
+  std::vector<Probe> probes;
+  bool has_grid = false;
+  glm::vec3 grid_origin{0.0f};
+  float grid_spacing = 0.0f;
+  glm::ivec3 grid_size{0};
+  std::vector<uint32_t> grid_index;  // per grid point, x fastest; pack::kNone32 where none
+  struct Set {
+    uint16_t kind = pack::kGroupBase;  // base, contribution, shadow or static shadow
+    int light = -1;   // index into BakedMaps::lights (the pack's light index), or -1
+    int object = -1;  // Scene::objects index (the pack's object index), or -1
+    std::vector<pack::ProbeEntry> entries;  // sorted by probe, each probe once
+  };
+  std::vector<Set> sets;  // at most one per owner, any order (the pack builder sorts)
+  bool empty() const { return probes.empty(); }
+};
+
+}  // namespace lightpatch::cooker
