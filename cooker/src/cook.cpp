@@ -93,6 +93,22 @@ PackOptions pack_options(const BakeOptions& bake) {
   return po;
 }
 
+ProbeOptions probe_options(const BakeOptions& bake) {
+  ProbeOptions po = bake.probes;
+  po.seed = bake.seed;
+  po.threads = bake.threads;
+  if (po.rays <= 0) po.rays = kProbePresetRays[static_cast<int>(bake.quality)];
+  return po;
+}
+
+ProbeBake cook_probes(const PreparedScene& p, const BakedMaps& maps, const BakeOptions& bake,
+                      Progress& progress, Report& report) {
+  const ProbeOptions po = probe_options(bake);
+  ProbeBake probes = place_probes(p.scene, *p.tracer, po, report);
+  bake_probes(probes, p.scene, p.layout, p.texels, *p.tracer, maps, po, progress, report);
+  return probes;
+}
+
 std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, Progress& progress,
                                Report& report, BakedMaps* maps_out) {
   // The cook's jobs in-process: the same code as `plan`, `cook-job` and `assemble`.

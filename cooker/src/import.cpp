@@ -662,6 +662,8 @@ glm::mat4 Importer::local_matrix(int node) const {
   return m;
 }
 
+bool extras_flag(const tinygltf::Value& extras, const char* key, const std::string& where);
+
 void Importer::visit(int node, const glm::mat4& parent, int depth) {
   if (node < 0 || size_t(node) >= model_.nodes.size())
     throw CookError(err("reference to missing node " + std::to_string(node)));
@@ -680,6 +682,9 @@ void Importer::visit(int node, const glm::mat4& parent, int depth) {
   const tinygltf::Node& n = model_.nodes[size_t(node)];
   if (n.mesh >= 0) add_mesh_node(node, world);
   add_light_node(node, world);
+  // A light probe the scene places (probes.h) at the node's origin.
+  if (extras_flag(n.extras, "lightProbe", err(node_label(model_, node))))
+    scene_.probes.push_back({n.name, glm::vec3(world[3])});
   for (int child : n.children) visit(child, world, depth + 1);
 }
 

@@ -63,12 +63,7 @@ glm::vec3 cosine_dir(const glm::vec3& n, float u, float v) {
   return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
 }
 
-// What texel_of_hit reads of the texel under a hit, in one place: with the texel set's arrays
-// apart, every gather ray paid a cache miss in each.
-struct TexelSurface {
-  int32_t mesh = -1;  // -1: not valid
-  glm::vec3 normal{0.0f};
-};
+}  // namespace
 
 std::vector<TexelSurface> texel_surfaces(const TexelSet& texels) {
   std::vector<TexelSurface> out(texels.valid.size());
@@ -77,7 +72,6 @@ std::vector<TexelSurface> texel_surfaces(const TexelSet& texels) {
   return out;
 }
 
-// The texel under a hit's light-map UV, kNoTexel for a mesh outside the light map.
 uint32_t texel_under(const Layout& layout, const TexelSet& texels, const Hit& h) {
   const MeshLayout& ml = layout.meshes[size_t(h.mesh)];
   const size_t t3 = size_t(h.triangle) * 3;
@@ -90,10 +84,6 @@ uint32_t texel_under(const Layout& layout, const TexelSet& texels, const Hit& h)
   return uint32_t(texels.index(x0, y0));
 }
 
-// The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
-// same side of the same mesh; otherwise, of the texels within two of it that do, the one whose
-// sample point lies nearest the hit; kNoTexel if none. `surfaces`: texel_surfaces(texels);
-// `under`: texel_under() of the hit.
 uint32_t texel_of_hit(const TexelSet& texels, const std::vector<TexelSurface>& surfaces,
                       const Hit& h, const glm::vec3& point, uint32_t under) {
   if (under == kNoTexel) return kNoTexel;
@@ -124,6 +114,8 @@ uint32_t texel_of_hit(const TexelSet& texels, const std::vector<TexelSurface>& s
   }
   return best;
 }
+
+namespace {
 
 // Hits on texel sets made without a layout (tests' hand-made grids): the nearest valid texel to
 // the hit point whose normal faces the same way, within two texel spacings.

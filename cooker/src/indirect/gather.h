@@ -29,6 +29,24 @@ namespace lightpatch::cooker {
 
 constexpr uint32_t kNoTexel = 0xFFFFFFFFu;
 
+// What texel_of_hit reads of the texel under a hit, in one place: with the texel set's arrays
+// apart, every gather ray paid a cache miss in each.
+struct TexelSurface {
+  int32_t mesh = -1;  // -1: not valid
+  glm::vec3 normal{0.0f};
+};
+std::vector<TexelSurface> texel_surfaces(const TexelSet& texels);
+
+// The texel under a hit's light-map UV, kNoTexel for a mesh outside the light map.
+uint32_t texel_under(const Layout& layout, const TexelSet& texels, const Hit& h);
+
+// The light-map texel a hit lands on: the texel under its light-map UV when that texel samples the
+// same side of the same mesh; otherwise, of the texels within two of it that do, the one whose
+// sample point lies nearest the hit; kNoTexel if none. `surfaces`: texel_surfaces(texels);
+// `under`: texel_under() of the hit.
+uint32_t texel_of_hit(const TexelSet& texels, const std::vector<TexelSurface>& surfaces,
+                      const Hit& h, const glm::vec3& point, uint32_t under);
+
 // The coarse texels of one indirect level.
 struct CoarseGrid {
   int level = 1;                        // k: fine texels per coarse texel per axis

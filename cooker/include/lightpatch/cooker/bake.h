@@ -11,6 +11,7 @@
 
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/probes.h"
 #include "lightpatch/cooker/progress.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/scene.h"
@@ -62,6 +63,9 @@ struct BakeOptions {
   // authored state's 99th percentile / 255, rounded down to a quarter octave). A level's step
   // pinned keeps every job's hash through edits that move its percentile (cook_jobs.h).
   float output_step = 0.0f;
+  // Light probes for moving things (probes.h): placed and lit after the maps are finalized, from
+  // them; they change no map. Its seed and threads are set from the ones above.
+  ProbeOptions probes;
 };
 
 // Throws CookError when the texel set's arrays disagree with its size or a light has a negative

@@ -13,6 +13,7 @@
 #include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/pack_builder.h"
+#include "lightpatch/cooker/probes.h"
 #include "lightpatch/cooker/progress.h"
 #include "lightpatch/cooker/reference_integrator.h"
 #include "lightpatch/cooker/report.h"
@@ -48,6 +49,14 @@ void finalize_maps(BakedMaps& maps, const PreparedScene& p, Progress& progress, 
 
 // The pack options a bake's options call for (with the plan off, tinted patches stay 3-channel).
 PackOptions pack_options(const BakeOptions& bake);
+
+// The probe options a bake's options call for: its seed and threads, the preset's gather rays.
+ProbeOptions probe_options(const BakeOptions& bake);
+
+// Places the light probes and lights them from the cook's finalized maps (probes.h); empty when
+// the bake's options turn probes off.
+ProbeBake cook_probes(const PreparedScene& p, const BakedMaps& maps, const BakeOptions& bake,
+                      Progress& progress, Report& report);
 
 // Bakes every light group, finalizes and packs: the pack's bytes. `maps_out`, if not null,
 // receives the finalized maps.

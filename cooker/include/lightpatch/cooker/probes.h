@@ -9,14 +9,17 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "lightpatch/cooker/layout.h"
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/progress.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/scene.h"
+#include "lightpatch/cooker/state_spec.h"
 #include "lightpatch/cooker/texels.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/pack_format.h"
@@ -28,7 +31,9 @@ struct ProbeOptions {
   // Grid spacing in metres; 0 = auto (1 m, coarser where the scene's bounds would need more than
   // kMaxAutoGridPoints grid points).
   float spacing = 0.0f;
-  int rays = 0;  // gather rays per probe; 0 = the preset (draft 256, preview 512, production 1024)
+  // Gather rays per probe; 0 = the preset (kProbePresetRays). bake_probes() needs it > 0.
+  int rays = 0;
+  // In BakeOptions::probes, the cook sets these two from the bake's own.
   uint64_t seed = 1;
   int threads = 0;  // 0 = all cores
 };
@@ -55,5 +60,31 @@ struct ProbeBake {
   std::vector<Set> sets;  // at most one per owner, any order (the pack builder sorts)
   bool empty() const { return probes.empty(); }
 };
+
+// Gather rays per probe for a preset's ProbeOptions::rays = 0 (Quality as an int: draft 0,
+// preview 1, production 2).
+constexpr int kProbePresetRays[3] = {256, 512, 1024};
+
+// The grid over the scene's bounds (ProbeOptions::spacing), less the points inside solid
+// geometry (more than a quarter of 64 rays from the point meet the back of a surface), then the
+// scene's placed probes (Scene::probes), each with its reach. Empty when !options.enabled.
+// Throws CookError for a spacing that is not finite and >= 0, or that needs more grid points or
+// probes than the pack holds (pack_format.h).
+ProbeBake place_probes(const Scene& scene, const Tracer& tracer, const ProbeOptions& options,
+                       Report& report);
+
+// Lights every probe of `probes` per set from the finalized maps of the cook (options.rays > 0
+// gather rays per probe), filling probes.sets. Deterministic for options.seed on any thread count.
+void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
+                 const TexelSet& texels, const Tracer& tracer, const BakedMaps& maps,
+                 const ProbeOptions& options, Progress& progress, Report& report);
+
+// Every probe's irradiance SH for one state directly, from that state's finalized map (the map
+// bake-state writes for it) and its lights, with the same rays as bake_probes: what the runtime's
+// sum of the sets for that state must give.
+std::vector<std::array<float, pack::kProbeShCount * 3>> bake_state_probes(
+    const ProbeBake& probes, const Scene& scene, const Layout& layout, const TexelSet& texels,
+    const Tracer& tracer, const FloatImage& state_map, const StateSpec& state,
+    const ProbeOptions& options);
 
 }  // namespace lightpatch::cooker

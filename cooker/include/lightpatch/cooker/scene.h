@@ -74,12 +74,19 @@ struct Object {
   std::vector<int> meshes;  // indices into Scene::meshes
 };
 
+// A light probe the scene places: a node with extras "lightProbe": true (probes.h).
+struct ProbePoint {
+  std::string name;  // glTF node name
+  glm::vec3 position{0.0f};
+};
+
 struct Scene {
   std::vector<MeshInstance> meshes;
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::vector<Light> lights;
   std::vector<Object> objects;
+  std::vector<ProbePoint> probes;
   // Import decisions worth telling the user (degenerate triangles dropped, ...).
   std::vector<std::string> notes;
 
