@@ -5,9 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <tuple>
+#include <utility>
 
 #include "atlas_packer.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/probes.h"
 #include "lightpatch/group_rules.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
@@ -120,10 +123,100 @@ void check_map(const FloatImage& m, const Layout& layout, int channels_a, int ch
   }
 }
 
+// The probe bake as pack records (pack_format.h, "Light probes"): names into the strings, sets
+// sorted by owner with kNone16 for "none", their entries concatenated in that order.
+void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count, PackContents& c) {
+  if (bake.probes.empty()) return;
+  if (bake.probes.size() > kMaxProbes) {
+    throw CookError(std::to_string(bake.probes.size()) + " light probes, over the format's " +
+                    std::to_string(kMaxProbes));
+  }
+  for (const ProbeBake::Probe& p : bake.probes) {
+    ProbeRecord r{};
+    for (int a = 0; a < 3; ++a) r.position[a] = p.position[a];
+    for (int k = 0; k < 6; ++k) r.reach[k] = p.reach[k];
+    if (!p.name.empty()) c.add_name(p.name, &r.name_offset, &r.name_length);
+    c.probes.push_back(r);
+  }
+  if (bake.has_grid) {
+    uint64_t points = 1;
+    for (int a = 0; a < 3; ++a) {
+      if (bake.grid_size[a] < 1) throw CookError("probe grid: an empty axis");
+      points *= uint64_t(bake.grid_size[a]);
+      if (points > kMaxProbeGridPoints) throw CookError("probe grid: too many points");
+    }
+    if (bake.grid_index.size() != points) throw CookError("probe grid: index count");
+    c.has_probe_grid = true;
+    for (int a = 0; a < 3; ++a) {
+      c.probe_grid.origin[a] = bake.grid_origin[a];
+      c.probe_grid.size[a] = uint32_t(bake.grid_size[a]);
+    }
+    c.probe_grid.spacing = bake.grid_spacing;
+    c.probe_grid_indices = bake.grid_index;
+  }
+  auto owner = [&](int v, size_t count, const char* what) -> uint16_t {
+    if (v < 0) return kNone16;
+    if (size_t(v) >= count) throw CookError(std::string("probe set: ") + what + " out of range");
+    return uint16_t(v);
+  };
+  std::vector<std::pair<ProbeSetRecord, const ProbeBake::Set*>> sets;
+  for (const ProbeBake::Set& s : bake.sets) {
+    if (s.entries.empty()) continue;
+    ProbeSetRecord r{};
+    r.kind = s.kind;
+    r.light = owner(s.light, light_count, "light");
+    r.object_a = owner(s.object, object_count, "object");
+    r.object_b = kNone16;
+    sets.emplace_back(r, &s);
+  }
+  auto key = [](const ProbeSetRecord& r) {
+    return std::tie(r.kind, r.light, r.object_a, r.object_b);
+  };
+  std::sort(sets.begin(), sets.end(),
+            [&](const auto& a, const auto& b) { return key(a.first) < key(b.first); });
+  for (size_t i = 0; i < sets.size(); ++i) {
+    ProbeSetRecord r = sets[i].first;
+    if (i > 0 && key(sets[i - 1].first) == key(r)) throw CookError("two probe sets of one owner");
+    r.first_entry = uint32_t(c.probe_entries.size());
+    r.entry_count = uint32_t(sets[i].second->entries.size());
+    c.probe_entries.insert(c.probe_entries.end(), sets[i].second->entries.begin(),
+                           sets[i].second->entries.end());
+    if (c.probe_entries.size() > 0xFFFFFFFFu) throw CookError("too many probe entries");
+    c.probe_sets.push_back(r);
+  }
+}
+
+// What the probes cost in the pack (the four sections' bytes, without their alignment padding).
+nlohmann::json probe_report(const PackContents& c) {
+  const uint64_t grid_bytes =
+      c.has_probe_grid ? sizeof(ProbeGridRecord) + c.probe_grid_indices.size() * 4 : 0;
+  const uint64_t bytes = c.probes.size() * sizeof(ProbeRecord) + grid_bytes +
+                         c.probe_sets.size() * sizeof(ProbeSetRecord) +
+                         c.probe_entries.size() * sizeof(ProbeEntry);
+  uint64_t named = 0, grid_points_with_probe = 0;
+  for (const ProbeRecord& p : c.probes) named += p.name_length > 0 ? 1 : 0;
+  for (uint32_t i : c.probe_grid_indices) grid_points_with_probe += i != kNone32 ? 1 : 0;
+  nlohmann::json j;
+  j["count"] = c.probes.size();
+  j["named"] = named;
+  j["grid"] =
+      c.has_probe_grid
+          ? nlohmann::json{{"size",
+                            {c.probe_grid.size[0], c.probe_grid.size[1], c.probe_grid.size[2]}},
+                           {"spacing", c.probe_grid.spacing},
+                           {"points_with_probe", grid_points_with_probe}}
+          : nlohmann::json(nullptr);
+  j["sets"] = c.probe_sets.size();
+  j["entries"] = c.probe_entries.size();
+  j["bytes"] = bytes;
+  return j;
+}
+
 }  // namespace
 
 std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const BakedMaps& maps,
-                                const PackOptions& options, Report& report) {
+                                const PackOptions& options, Report& report,
+                                const ProbeBake* probes) {
   if (layout.width <= 0 || layout.height <= 0 || layout.width > int(kMaxLightmapSize) ||
       layout.height > int(kMaxLightmapSize)) {
     throw CookError("light-map size " + std::to_string(layout.width) + "x" +
@@ -547,6 +640,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     }
   }
 
+  if (probes != nullptr) add_probes(*probes, c.lights.size(), c.objects.size(), c);
+
   std::vector<uint8_t> bytes = write_pack(c);
   {
     // The writer's output must pass the loader's validation (the format; whether it is within a
@@ -664,6 +759,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["atlas_to_lightmap_ratio"] =
       lightmap_bytes > 0 ? double(atlas_bytes) / double(lightmap_bytes) : 0.0;
   j["pack_bytes"] = bytes.size();
+  j["probes"] = probe_report(c);
   nlohmann::json maps_colour = nlohmann::json::array();
   int three = 0, one = 0;
   for (size_t i = 0; i < jobs.size(); ++i) {

@@ -43,6 +43,17 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
       {kSectionStrings, c.strings.size()},
   };
   if (!c.meshes.empty()) sections.push_back({kSectionMeshes, c.meshes.size() * sizeof(MeshRecord)});
+  const bool probes = !c.probes.empty();
+  const bool grid = probes && c.has_probe_grid;
+  if (probes) {
+    sections.push_back({kSectionProbes, c.probes.size() * sizeof(ProbeRecord)});
+    if (grid) {
+      sections.push_back(
+          {kSectionProbeGrid, sizeof(ProbeGridRecord) + c.probe_grid_indices.size() * 4});
+    }
+    sections.push_back({kSectionProbeSets, c.probe_sets.size() * sizeof(ProbeSetRecord)});
+    sections.push_back({kSectionProbeEntries, c.probe_entries.size() * sizeof(ProbeEntry)});
+  }
   sections.push_back({kSectionAtlasData, atlas_bytes});
   if (!c.meshes.empty()) sections.push_back({kSectionMeshData, mesh_bytes});
 
@@ -91,6 +102,19 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
   put(find(kSectionGroups).offset, c.groups.data(), c.groups.size() * sizeof(GroupRecord));
   put(find(kSectionPatches).offset, c.patches.data(), c.patches.size() * sizeof(PatchRecord));
   put(find(kSectionStrings).offset, c.strings.data(), c.strings.size());
+  if (probes) {
+    put(find(kSectionProbes).offset, c.probes.data(), c.probes.size() * sizeof(ProbeRecord));
+    if (grid) {
+      const uint64_t at = find(kSectionProbeGrid).offset;
+      put(at, &c.probe_grid, sizeof(ProbeGridRecord));
+      put(at + sizeof(ProbeGridRecord), c.probe_grid_indices.data(),
+          c.probe_grid_indices.size() * 4);
+    }
+    put(find(kSectionProbeSets).offset, c.probe_sets.data(),
+        c.probe_sets.size() * sizeof(ProbeSetRecord));
+    put(find(kSectionProbeEntries).offset, c.probe_entries.data(),
+        c.probe_entries.size() * sizeof(ProbeEntry));
+  }
 
   const Pending& atlas_data = find(kSectionAtlasData);
   uint64_t at = atlas_data.offset;

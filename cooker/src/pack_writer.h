@@ -29,6 +29,14 @@ struct PackContents {
     std::vector<uint32_t> indices;
   };
   std::vector<Mesh> meshes;
+  // Light probes (pack_format.h, "Light probes"): written only when `probes` is not empty; the
+  // grid only with has_probe_grid (probe_grid_indices: one per grid point, x fastest).
+  std::vector<pack::ProbeRecord> probes;
+  bool has_probe_grid = false;
+  pack::ProbeGridRecord probe_grid{};
+  std::vector<uint32_t> probe_grid_indices;
+  std::vector<pack::ProbeSetRecord> probe_sets;
+  std::vector<pack::ProbeEntry> probe_entries;
 
   // Appends a name to `strings`; returns {offset, length}.
   void add_name(const std::string& name, uint32_t* offset, uint32_t* length);

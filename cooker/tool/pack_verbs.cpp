@@ -67,6 +67,14 @@ const char* section_label(uint32_t type) {
       return "meshes";
     case pack::kSectionMeshData:
       return "mesh_data";
+    case pack::kSectionProbes:
+      return "probes";
+    case pack::kSectionProbeGrid:
+      return "probe_grid";
+    case pack::kSectionProbeSets:
+      return "probe_sets";
+    case pack::kSectionProbeEntries:
+      return "probe_entries";
   }
   return "unknown";
 }
@@ -158,6 +166,28 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
     patch_bytes += uint64_t(p.patch(i).width) * p.patch(i).height * p.patch(i).channel_count;
   j["atlas_patch_bytes"] = patch_bytes;
   j["atlas_waste"] = atlas_bytes ? 1.0 - double(patch_bytes) / double(atlas_bytes) : 0.0;
+  // Light probes (pack_format.h, "Light probes").
+  nlohmann::ordered_json probes;
+  probes["count"] = p.probe_count();
+  uint32_t named = 0;
+  for (uint32_t i = 0; i < p.probe_count(); ++i) named += p.probe_name(i).length > 0 ? 1 : 0;
+  probes["named"] = named;
+  if (p.has_probe_grid()) {
+    const pack::ProbeGridRecord& g = p.probe_grid();
+    uint32_t with_probe = 0;
+    for (uint32_t i = 0; i < p.probe_grid_point_count(); ++i)
+      with_probe += p.probe_grid_indices()[i] != pack::kNone32 ? 1 : 0;
+    probes["grid"] = {{"size", {g.size[0], g.size[1], g.size[2]}},
+                      {"spacing", g.spacing},
+                      {"origin", {g.origin[0], g.origin[1], g.origin[2]}},
+                      {"points_with_probe", with_probe}};
+  } else {
+    probes["grid"] = nullptr;
+  }
+  probes["sets"] = p.probe_set_count();
+  probes["entries"] = p.probe_entry_count();
+  probes["bytes"] = p.probe_bytes();
+  j["probes"] = probes;
   return j;
 }
 
@@ -251,7 +281,17 @@ int verb_info(Args& args) {
   for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
     std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);
   }
-  std::printf("\nmeshes         %u\nsection bytes ", pack.view.mesh_count());
+  std::printf("\nmeshes         %u\n", pack.view.mesh_count());
+  const auto& pr = j["probes"];
+  std::printf("probes         %u (%u named)", pack.view.probe_count(), pr["named"].get<unsigned>());
+  if (pack.view.has_probe_grid()) {
+    const pack::ProbeGridRecord& g = pack.view.probe_grid();
+    std::printf(", grid %ux%ux%u at %g m (%u points with a probe)", g.size[0], g.size[1], g.size[2],
+                double(g.spacing), pr["grid"]["points_with_probe"].get<unsigned>());
+  }
+  std::printf(", %u sets, %u entries, %llu bytes\nsection bytes ", pack.view.probe_set_count(),
+              pack.view.probe_entry_count(),
+              static_cast<unsigned long long>(pack.view.probe_bytes()));
   for (const auto& [k, v] : j["section_bytes"].items()) {
     std::printf(" %s %llu", k.c_str(), v.get<unsigned long long>());
   }

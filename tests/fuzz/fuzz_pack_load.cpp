@@ -1,6 +1,6 @@
 // libFuzzer target: the runtime's pack loader (PackView::open validates everything once) and, for
 // packs it accepts, every accessor and a CPU recomposition of two states, which must stay within
-// what open() validated.
+// what open() validated, and the light probes evaluated for two states and sampled.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/light_probes.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/scene_state.h"
 
@@ -80,6 +81,32 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const uint64_t i = (view.map_texels() - view.map_offset(pack::kTargetIndirectMap)) * 3;
         sum += recomposer.indirect_map()[i - 1] > 0.0f ? 1 : 0;
       }
+    }
+  }
+  // Light probes: every probe, and the grid sampled around and beyond its box.
+  {
+    SceneState state;
+    LightProbes probes;
+    if (state.init(view, &error) == Status::kOk && probes.init(view, &error) == Status::kOk) {
+      probes.update(state);
+      for (uint32_t i = 0; i < state.light_count(); i += 2) state.set_light_on(i, false);
+      probes.update(state);
+      float sh[kProbeShFloats] = {};
+      for (uint32_t i = 0; i < probes.probe_count(); ++i) {
+        probes.probe_sh(i, sh);
+        sum += sh[0] > 0.0f ? 1 : 0;
+        sum += view.probe_name(i).length;
+      }
+      if (view.has_probe_grid()) {
+        const pack::ProbeGridRecord& g = view.probe_grid();
+        for (int k = -1; k <= 8; ++k) {
+          float pos[3];
+          for (int a = 0; a < 3; ++a)
+            pos[a] = g.origin[a] + g.spacing * float(g.size[a]) * (float(k) / 7.0f);
+          sum += probes.sample(pos, sh) ? 1 : 0;
+        }
+      }
+      sum += uint32_t(probes.find_probe("probe_0"));
     }
   }
   volatile uint64_t sink = sum;

@@ -15,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "counters.h"
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/half_float.h"
 #include "lightpatch/platform/egl_context.h"
@@ -25,6 +24,7 @@
 #include "runtime/map_reference.h"
 #include "runtime/synthetic_pack.h"
 #include "sampled_maps.h"
+#include "support/counters.h"
 
 namespace lightpatch {
 namespace {

@@ -15,9 +15,11 @@
 
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/pack_builder.h"
+#include "lightpatch/cooker/probes.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/group_rules.h"
+#include "lightpatch/light_probes.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/patch_decode.h"
 #include "pack_bytes.h"
@@ -394,6 +396,82 @@ TEST(PackBuilder, LargePatchesAreTiledToTheMaximumAtlasSize) {
   add_patch_bounds(v, v.base_group(), bound);
   expect_within(
       r, bound, [&](int x, int y, int c) { return s.maps.base.at(x, y, c); }, "tiled base");
+}
+
+// A probe bake through the pack builder: sets sorted by owner (given in any order), empty ones
+// dropped, names in the strings, the grid and its indices, every coefficient as baked; the
+// report's "probes" counts; two sets of one owner refused.
+TEST(RoundTrip, ProbesArePackedSortedAndReported) {
+  test::SyntheticOptions o;
+  test::Synthetic s = test::make_synthetic(o);
+  ASSERT_GE(s.maps.lights.size(), 2u);
+  ASSERT_GE(s.scene.objects.size(), 1u);
+  ProbeBake bake;
+  for (int i = 0; i < 5; ++i) {
+    ProbeBake::Probe p;
+    p.position = glm::vec3(0.5f * float(i % 2), 1.0f, 0.5f * float(i / 2));
+    for (float& r : p.reach) r = 0.5f;
+    if (i == 4) p.name = "hand_probe";
+    bake.probes.push_back(p);
+  }
+  bake.has_grid = true;
+  bake.grid_origin = glm::vec3(0.0f, 1.0f, 0.0f);
+  bake.grid_spacing = 0.5f;
+  bake.grid_size = glm::ivec3(2, 1, 3);
+  bake.grid_index = {0, 1, 2, 3, pack::kNone32, pack::kNone32};
+  auto entry = [](uint32_t probe, float v) {
+    pack::ProbeEntry e{};
+    e.probe = probe;
+    for (uint32_t k = 0; k < kProbeShFloats; ++k) e.sh[k] = v + 0.01f * float(k);
+    return e;
+  };
+  auto add_set = [&](uint16_t kind, int light, int object, std::vector<pack::ProbeEntry> e) {
+    ProbeBake::Set set;
+    set.kind = kind;
+    set.light = light;
+    set.object = object;
+    set.entries = std::move(e);
+    bake.sets.push_back(set);
+  };
+  add_set(pack::kGroupShadow, 1, 0, {entry(2, -0.5f)});
+  add_set(pack::kGroupContribution, 1, -1, {entry(0, 2.0f), entry(3, 1.0f)});
+  add_set(pack::kGroupContribution, 0, -1, {});  // reaches nothing: dropped
+  add_set(pack::kGroupBase, -1, -1, {entry(0, 1.0f), entry(1, 1.0f), entry(4, 3.0f)});
+  add_set(pack::kGroupStaticShadow, -1, 0, {entry(4, -0.25f)});
+  Report report;
+  const std::vector<uint8_t> bytes =
+      build_pack(s.scene, s.layout, s.maps, PackOptions{}, report, &bake);
+  PackView v;
+  Error e;
+  ASSERT_EQ(PackView::open(bytes.data(), bytes.size(), &v, &e), Status::kOk) << e.message;
+  ASSERT_EQ(v.probe_count(), 5u);
+  EXPECT_EQ(v.find_probe("hand_probe", 10), 4);
+  EXPECT_EQ(v.probe_name(0).length, 0u);
+  ASSERT_TRUE(v.has_probe_grid());
+  EXPECT_EQ(v.probe_grid().size[2], 3u);
+  EXPECT_EQ(v.probe_grid_indices()[4], pack::kNone32);
+  ASSERT_EQ(v.probe_set_count(), 4u);
+  const uint16_t kinds[4] = {pack::kGroupBase, pack::kGroupContribution, pack::kGroupShadow,
+                             pack::kGroupStaticShadow};
+  for (uint32_t i = 0; i < 4; ++i) EXPECT_EQ(v.probe_set(i).kind, kinds[i]) << i;
+  EXPECT_EQ(v.probe_set(1).light, 1u);
+  EXPECT_EQ(v.probe_set(1).object_a, pack::kNone16);
+  EXPECT_EQ(v.probe_set(2).object_a, 0u);
+  EXPECT_EQ(v.probe_set(3).light, pack::kNone16);
+  ASSERT_EQ(v.probe_entry_count(), 7u);
+  EXPECT_EQ(v.probe_entry(v.probe_set(1).first_entry + 1).probe, 3u);
+  EXPECT_EQ(v.probe_entry(v.probe_set(0).first_entry + 2).sh[26], 3.0f + 0.01f * 26.0f);
+  const nlohmann::json& j = report.root()["pack"]["probes"];
+  EXPECT_EQ(j["count"], 5);
+  EXPECT_EQ(j["named"], 1);
+  EXPECT_EQ(j["sets"], 4);
+  EXPECT_EQ(j["entries"], 7);
+  EXPECT_EQ(j["grid"]["points_with_probe"], 4);
+  EXPECT_EQ(j["bytes"], v.probe_bytes());
+
+  add_set(pack::kGroupBase, -1, -1, {entry(2, 1.0f)});
+  Report again;
+  EXPECT_THROW(build_pack(s.scene, s.layout, s.maps, PackOptions{}, again, &bake), CookError);
 }
 
 }  // namespace

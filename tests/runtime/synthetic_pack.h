@@ -40,7 +40,44 @@ struct SyntheticOptions {
   // Atlas content by texel (x, y) and channel, the same in every atlas (default: random bytes):
   // known values for closed-form expectations.
   std::function<uint8_t(uint32_t x, uint32_t y, uint32_t channel)> atlas_byte;
+
+  // Light probes (pack_format.h, "Light probes"): a grid of probe_grid[0] x [1] x [2] points
+  // (any 0: no probes) at probe_spacing metres from probe_origin, a point without a probe with
+  // probe_hole_probability, plus named_probes named probes off the grid. Sets: the base (every
+  // probe), each light's contribution, and the shadow and static-shadow sets of the map's groups
+  // of those kinds; each non-base set reaches a probe with probe_reach_probability. Drawn after
+  // everything else, so the rest of the pack is the same with and without probes.
+  uint32_t probe_grid[3] = {0, 0, 0};
+  float probe_origin[3] = {-1.0f, 0.25f, -2.0f};
+  float probe_spacing = 0.5f;
+  float probe_hole_probability = 0.1f;
+  uint32_t named_probes = 2;
+  float probe_reach_probability = 0.6f;
+  // Reach of every probe in every direction (metres; default: random in [0.5, 1] * spacing, a
+  // sixth of them shorter, 0.2 * spacing).
+  float probe_reach = -1.0f;
+  // Overrides an entry's SH (default: random in [-1, 1], the base's DC term in [1, 2]).
+  std::function<void(const pack::ProbeRecord& probe, const pack::ProbeSetRecord& set,
+                     float sh[pack::kProbeShCount * 3])>
+      probe_sh;
+  // Leaves this section type out of the index (0: none), for refusal tests.
+  uint32_t drop_section = 0;
+  // Edits the probe records before the table checksum is computed.
+  std::function<void(std::vector<pack::ProbeRecord>&, pack::ProbeGridRecord&,
+                     std::vector<uint32_t>& grid, std::vector<pack::ProbeSetRecord>&,
+                     std::vector<pack::ProbeEntry>&)>
+      mutate_probes;
 };
+
+// `o` with a probe grid of nx x ny x nz points and the seed.
+inline SyntheticOptions with_probe_grid(SyntheticOptions o, uint32_t nx, uint32_t ny, uint32_t nz,
+                                        uint32_t seed) {
+  o.probe_grid[0] = nx;
+  o.probe_grid[1] = ny;
+  o.probe_grid[2] = nz;
+  o.seed = seed;
+  return o;
+}
 
 // Pack bytes in 8-byte aligned storage.
 struct SyntheticPack {
@@ -168,14 +205,80 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     }
   }
 
+  // Light probes.
+  std::vector<ProbeRecord> probes;
+  ProbeGridRecord grid{};
+  std::vector<uint32_t> grid_index;
+  std::vector<ProbeSetRecord> sets;
+  std::vector<ProbeEntry> entries;
+  const bool with_probes = o.probe_grid[0] && o.probe_grid[1] && o.probe_grid[2];
+  if (with_probes) {
+    for (int a = 0; a < 3; ++a) {
+      grid.origin[a] = o.probe_origin[a];
+      grid.size[a] = o.probe_grid[a];
+    }
+    grid.spacing = o.probe_spacing;
+    auto reach = [&](ProbeRecord& r) {
+      for (float& v : r.reach) {
+        v = o.probe_reach >= 0.0f         ? o.probe_reach
+            : uniform(0, 1) < 1.0f / 6.0f ? 0.2f * o.probe_spacing
+                                          : uniform(0.5f, 1.0f) * o.probe_spacing;
+      }
+    };
+    for (uint32_t k = 0; k < o.probe_grid[2]; ++k)
+      for (uint32_t j = 0; j < o.probe_grid[1]; ++j)
+        for (uint32_t i = 0; i < o.probe_grid[0]; ++i) {
+          if (uniform(0, 1) < o.probe_hole_probability) {
+            grid_index.push_back(kNone32);
+            continue;
+          }
+          ProbeRecord r{};
+          const uint32_t ijk[3] = {i, j, k};
+          for (int a = 0; a < 3; ++a) r.position[a] = o.probe_origin[a] + o.probe_spacing * ijk[a];
+          reach(r);
+          grid_index.push_back(uint32_t(probes.size()));
+          probes.push_back(r);
+        }
+    for (uint32_t n = 0; n < o.named_probes; ++n) {
+      ProbeRecord r{};
+      for (int a = 0; a < 3; ++a)
+        r.position[a] = o.probe_origin[a] + uniform(0.0f, float(o.probe_grid[a])) * o.probe_spacing;
+      reach(r);
+      const std::string name = "probe_" + std::to_string(n);
+      r.name_offset = uint32_t(strings.size());
+      r.name_length = uint32_t(name.size());
+      strings += name;
+      probes.push_back(r);
+    }
+    // Sets in sorted order, from the map's groups (pair corrections have none).
+    for (const GroupRecord& g : groups) {
+      if (g.kind == kGroupPairCorrection) continue;
+      ProbeSetRecord set{g.kind, g.light, g.object_a, g.object_b, uint32_t(entries.size()), 0};
+      for (uint32_t p = 0; p < probes.size(); ++p) {
+        if (g.kind != kGroupBase && uniform(0, 1) >= o.probe_reach_probability) continue;
+        ProbeEntry e{};
+        e.probe = p;
+        for (float& v : e.sh) v = uniform(-1.0f, 1.0f);
+        if (g.kind == kGroupBase) e.sh[0] = e.sh[1] = e.sh[2] = uniform(1.0f, 2.0f);
+        if (o.probe_sh) o.probe_sh(probes[p], set, e.sh);
+        entries.push_back(e);
+      }
+      set.entry_count = uint32_t(entries.size()) - set.first_entry;
+      if (set.entry_count > 0) sets.push_back(set);
+    }
+    if (o.mutate_probes) o.mutate_probes(probes, grid, grid_index, sets, entries);
+  }
+
   // Layout: header, index, then 256-aligned sections.
-  const uint32_t section_count = 7;
+  const uint32_t section_count = 7 + (with_probes ? 4 : 0) - (o.drop_section != 0 ? 1 : 0);
   auto align = [](uint64_t v) {
     return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
   };
   uint64_t cursor = align(sizeof(Header) + section_count * sizeof(SectionEntry));
   std::vector<SectionEntry> index;
+  constexpr uint64_t kDropped = ~uint64_t(0);  // a dropped section's offset: nothing written
   auto place = [&](uint32_t type, uint64_t length) {
+    if (type == o.drop_section) return kDropped;
     index.push_back(SectionEntry{type, 0, cursor, length});
     cursor = align(cursor + length);
     return index.back().offset;
@@ -188,6 +291,13 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   const uint64_t atlas_bytes = align(uint64_t(as) * as * 4);
   const uint64_t data_at = place(kSectionAtlasData, atlas_bytes * atlases.size());
   const uint64_t strings_at = place(kSectionStrings, strings.size());
+  uint64_t probes_at = 0, grid_at = 0, sets_at = 0, entries_at = 0;
+  if (with_probes) {
+    probes_at = place(kSectionProbes, probes.size() * sizeof(ProbeRecord));
+    grid_at = place(kSectionProbeGrid, sizeof(ProbeGridRecord) + grid_index.size() * 4);
+    sets_at = place(kSectionProbeSets, sets.size() * sizeof(ProbeSetRecord));
+    entries_at = place(kSectionProbeEntries, entries.size() * sizeof(ProbeEntry));
+  }
   std::vector<AtlasRecord> atlas_records;
   for (size_t a = 0; a < atlases.size(); ++a) {
     atlas_records.push_back(AtlasRecord{as, as, data_at + a * atlas_bytes});
@@ -213,7 +323,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   out.storage.assign((cursor + 7) / 8, 0);
   uint8_t* b = reinterpret_cast<uint8_t*>(out.storage.data());
   auto put = [&](uint64_t at, const void* src, size_t n) {
-    if (n) std::memcpy(b + at, src, n);
+    if (n && at < cursor) std::memcpy(b + at, src, n);
   };
   put(lights_at, lights.data(), lights.size() * sizeof(LightRecord));
   put(objects_at, objects.data(), objects.size() * sizeof(ObjectRecord));
@@ -223,6 +333,15 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   for (size_t a = 0; a < atlases.size(); ++a)
     put(data_at + a * atlas_bytes, atlases[a].data(), atlases[a].size());
   put(strings_at, strings.data(), strings.size());
+  if (with_probes) {
+    put(probes_at, probes.data(), probes.size() * sizeof(ProbeRecord));
+    if (grid_at != kDropped) {
+      put(grid_at, &grid, sizeof grid);
+      put(grid_at + sizeof grid, grid_index.data(), grid_index.size() * 4);
+    }
+    put(sets_at, sets.data(), sets.size() * sizeof(ProbeSetRecord));
+    put(entries_at, entries.data(), entries.size() * sizeof(ProbeEntry));
+  }
   put(sizeof(Header), index.data(), index.size() * sizeof(SectionEntry));
 
   uint32_t crc = crc32(b + sizeof(Header), index.size() * sizeof(SectionEntry));

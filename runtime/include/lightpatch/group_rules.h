@@ -1,6 +1,7 @@
 // The rules of the patch-group kinds (pack_format.h, GroupKind), written once: the sign with which
 // a group enters the map, its factor, when a state draws it, and what a change touches. The
-// planner, the CPU recomposers and the tests' reference all use these.
+// planner, the CPU recomposers, the light probes (light_probes.h) and the tests' reference all use
+// these.
 //
 //   L = B - sum_{o visible} S_o + sum_l f_l * (C_l - sum_{o visible} S_ol + sum_{a<b visible}
 //   P_lab)
@@ -33,9 +34,10 @@ constexpr bool group_has_light(uint16_t kind) {
 }
 
 // Whether a state draws the group. `lit(light)`: the light's factor is not zero;
-// `visible(object)`: the object is visible.
-template <typename Lit, typename Visible>
-bool group_active(const pack::GroupRecord& g, Lit&& lit, Visible&& visible) {
+// `visible(object)`: the object is visible. `Owner` is a pack::GroupRecord or a
+// pack::ProbeSetRecord (a probe set follows the state by the same rule as its owner's group).
+template <typename Owner, typename Lit, typename Visible>
+bool group_active(const Owner& g, Lit&& lit, Visible&& visible) {
   switch (g.kind) {
     case pack::kGroupBase:
       return true;

@@ -1,4 +1,4 @@
-// lightpatch pack format, version 3: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 4: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -321,9 +321,9 @@ static_assert(offsetof(ProbeRecord, name_offset) == 36);
 // where no probe is: inside geometry, or where nothing moves). A point between grid points blends
 // the 8 corners of its cell; outside the grid it takes the nearest cell.
 struct ProbeGridRecord {
-  float origin[3];   // world space, metres, finite
-  float spacing;     // metres, finite, > 0
-  uint32_t size[3];  // grid points per axis, each >= 1, product <= kMaxProbeGridPoints
+  float origin[3];    // world space, metres, finite
+  float spacing;      // metres, finite, > 0
+  uint32_t size[3];   // grid points per axis, each >= 1, product <= kMaxProbeGridPoints
   uint32_t reserved;  // 0
 };
 static_assert(sizeof(ProbeGridRecord) == 32);

@@ -13,9 +13,14 @@
 // The maps, laid out one after the other ("map set": what add_patches and the CPU sinks use):
 // the light map's width * height texels, row 0 at the top, then the indirect map's
 // indirect_width * indirect_height texels (none without an indirect map); map_offset(target) is
-// where a target's first texel lies, map_texels() the total. The view never
-// copies or owns the bytes: the caller keeps the memory alive and unchanged while the view is used.
-// No exceptions, no allocation.
+// where a target's first texel lies, map_texels() the total.
+//
+// Light probes (optional sections, pack_format.h "Light probes"): kProbes comes with kProbeSets
+// and kProbeEntries (all three or none; kProbeGrid only with them); at most kMaxProbes probes and
+// kMaxProbeGridPoints grid points; every probe set keyed like a group (never a pair correction),
+// sorted, its entries contiguous and ascending by probe, every SH coefficient finite. The view
+// never copies or owns the bytes: the caller keeps the memory alive and unchanged while the view is
+// used. No exceptions, no allocation.
 #pragma once
 
 #include <cstdint>
@@ -130,6 +135,26 @@ class PackView {
   int32_t find_light(const char* name, uint32_t length) const;
   int32_t find_object(const char* name, uint32_t length) const;
 
+  // Light probes (0 / false / null without them). Grid indices: probe_grid_point_count() uint32
+  // values, x fastest, each a probe index or pack::kNone32.
+  uint32_t probe_count() const { return probe_count_; }
+  const pack::ProbeRecord& probe(uint32_t i) const { return probes_[i]; }
+  Name probe_name(uint32_t i) const;  // length 0 for a grid probe
+  bool has_probe_grid() const { return probe_grid_ != nullptr; }
+  const pack::ProbeGridRecord& probe_grid() const { return *probe_grid_; }
+  const uint32_t* probe_grid_indices() const { return probe_grid_indices_; }
+  uint32_t probe_grid_point_count() const { return probe_grid_points_; }
+  uint32_t probe_set_count() const { return probe_set_count_; }
+  const pack::ProbeSetRecord& probe_set(uint32_t i) const { return probe_sets_[i]; }
+  const pack::ProbeSetRecord* probe_sets() const { return probe_sets_; }
+  uint32_t probe_entry_count() const { return probe_entry_count_; }
+  const pack::ProbeEntry& probe_entry(uint32_t i) const { return probe_entries_[i]; }
+  const pack::ProbeEntry* probe_entries() const { return probe_entries_; }
+  // Bytes of the four probe sections together (0 without probes).
+  uint64_t probe_bytes() const { return probe_bytes_; }
+  // Index of the named probe, or -1 (grid probes have no name).
+  int32_t find_probe(const char* name, uint32_t length) const;
+
   // Group lookups; -1 when the pack holds no such group (nothing to draw).
   int32_t base_group() const;
   int32_t contribution_group(uint32_t light) const;
@@ -150,6 +175,16 @@ class PackView {
   const pack::MeshRecord* meshes_ = nullptr;
   const char* strings_ = nullptr;
   uint64_t strings_length_ = 0;
+  const pack::ProbeRecord* probes_ = nullptr;
+  const pack::ProbeGridRecord* probe_grid_ = nullptr;
+  const uint32_t* probe_grid_indices_ = nullptr;
+  const pack::ProbeSetRecord* probe_sets_ = nullptr;
+  const pack::ProbeEntry* probe_entries_ = nullptr;
+  uint32_t probe_count_ = 0;
+  uint32_t probe_grid_points_ = 0;
+  uint32_t probe_set_count_ = 0;
+  uint32_t probe_entry_count_ = 0;
+  uint64_t probe_bytes_ = 0;
 };
 
 // CRC-32 (IEEE, reflected), the pack's table checksum. `crc` chains calls; start with 0.

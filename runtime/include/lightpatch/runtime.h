@@ -51,6 +51,10 @@
 // disabled, texture units 0..8 unbound, active unit 0, and the viewport set to the light map's
 // size. Depth, stencil, scissor and face culling are disabled while drawing and left disabled.
 //
+// Light probes (light_probes.h) are evaluated on the CPU on every path: the game keeps a
+// LightProbes, calls probes.update(runtime.state()) each frame, samples the SH where its moving
+// things are and uploads it as uniforms; the runtime draws no probe.
+//
 // GL errors are checked (glGetError, which can stall a driver) only in builds with
 // LIGHTPATCH_GL_CHECKS (CMake option; on in Debug builds); elsewhere update() does not look.
 #pragma once
@@ -123,6 +127,9 @@ class Runtime {
   Status set_object_visible(uint32_t object, bool visible);
   LightState light(uint32_t light) const;
   bool object_visible(uint32_t object) const { return planner_.object_visible(object); }
+  // The wanted state as a SceneState (what the setters above accepted), e.g. for
+  // LightProbes::update(). Valid from open() to close().
+  const SceneState& state() const { return wanted_; }
 
   // Once per frame, on an open runtime: at most `budget_texels` texels written (planner.h's
   // budget rule). kGlError if GL checks are built in and the driver reported an error.
@@ -189,6 +196,7 @@ class Runtime {
   PackView pack_;
   RuntimeLimits limits_;
   Planner planner_;
+  SceneState wanted_;  // mirrors the planner's wanted state (state())
   bool open_ = false;
   RecomposePath path_ = RecomposePath::kCpu;
   TargetPrecision precision_;

@@ -8,6 +8,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 
 namespace lightpatch {
 
@@ -45,6 +46,14 @@ const char* section_name(uint32_t type) {
       return "meshes";
     case kSectionMeshData:
       return "mesh data";
+    case kSectionProbes:
+      return "probes";
+    case kSectionProbeGrid:
+      return "probe grid";
+    case kSectionProbeSets:
+      return "probe sets";
+    case kSectionProbeEntries:
+      return "probe entries";
   }
   return "unknown";
 }
@@ -80,10 +89,41 @@ bool finite_non_negative(float v) {
   return std::isfinite(v) && v >= 0.0f;
 }
 
-// Lexicographic key of a group for the sort/uniqueness check.
-uint64_t group_key(const GroupRecord& g) {
+// Lexicographic key of a group (or probe set: the same owner fields) for the sort/uniqueness
+// check.
+template <typename Owner>
+uint64_t group_key(const Owner& g) {
   return (uint64_t(g.kind) << 48) | (uint64_t(g.light) << 32) | (uint64_t(g.object_a) << 16) |
          uint64_t(g.object_b);
+}
+
+// Whether an owner's fields are in range and kNone16 exactly where its kind says (GroupKind).
+// The kind is known (<= kGroupKindMax).
+bool owner_ok(uint16_t kind, uint16_t light, uint16_t object_a, uint16_t object_b,
+              const Header& h) {
+  const bool light_ok = light < h.light_count;
+  const bool a_ok = object_a < h.object_count;
+  const bool b_ok = object_b < h.object_count;
+  switch (kind) {
+    case kGroupBase:
+      return light == kNone16 && object_a == kNone16 && object_b == kNone16;
+    case kGroupContribution:
+      return light_ok && object_a == kNone16 && object_b == kNone16;
+    case kGroupShadow:
+      return light_ok && a_ok && object_b == kNone16;
+    case kGroupPairCorrection:
+      return light_ok && a_ok && b_ok && object_a < object_b;
+    case kGroupStaticShadow:
+      return light == kNone16 && a_ok && object_b == kNone16;
+  }
+  return false;
+}
+
+bool all_finite(const float* v, uint32_t n) {
+  for (uint32_t i = 0; i < n; ++i) {
+    if (!std::isfinite(v[i])) return false;
+  }
+  return true;
 }
 
 // What a successful validation hands to PackView::open.
@@ -97,6 +137,15 @@ struct Parsed {
   const MeshRecord* meshes = nullptr;
   const char* strings = nullptr;
   uint64_t strings_length = 0;
+  const ProbeRecord* probes = nullptr;
+  const ProbeGridRecord* probe_grid = nullptr;
+  const ProbeSetRecord* probe_sets = nullptr;
+  const ProbeEntry* probe_entries = nullptr;
+  uint32_t probe_count = 0;
+  uint32_t probe_grid_points = 0;
+  uint32_t probe_set_count = 0;
+  uint32_t probe_entry_count = 0;
+  uint64_t probe_bytes = 0;
 };
 
 class Validator {
@@ -111,6 +160,8 @@ class Validator {
   Status check_name(const char* what, uint32_t index, uint32_t offset, uint32_t length,
                     bool allow_empty);
   Status check_limits(const Header& h);
+  Status check_probe_sections(Parsed* out);
+  Status check_probes(const Header& h, Parsed* out);
   template <typename T>
   const T* at(uint64_t offset) const {
     return reinterpret_cast<const T*>(b_ + offset);
@@ -159,6 +210,176 @@ Status Validator::check_limits(const Header& h) {
                 h.lightmap_width, h.lightmap_height, static_cast<unsigned long long>(texels),
                 static_cast<unsigned long long>(limits_.max_lightmap_texels));
   }
+  return Status::kOk;
+}
+
+// The probe sections' presence and sizes (before the checksum, like the other sections' sizes):
+// all of probes, sets and entries or none, the grid only with them, whole records, the grid's
+// point count from its record.
+Status Validator::check_probe_sections(Parsed* out) {
+  const Section& probes = sections_[kSectionProbes];
+  const Section& grid = sections_[kSectionProbeGrid];
+  const Section& sets = sections_[kSectionProbeSets];
+  const Section& entries = sections_[kSectionProbeEntries];
+  if (!probes.present) {
+    for (uint32_t t : {kSectionProbeGrid, kSectionProbeSets, kSectionProbeEntries}) {
+      if (sections_[t].present)
+        return fail(Status::kCorrupt, "%s section without a probes section", section_name(t));
+    }
+    return Status::kOk;
+  }
+  for (uint32_t t : {kSectionProbeSets, kSectionProbeEntries}) {
+    if (!sections_[t].present)
+      return fail(Status::kCorrupt, "probes section without a %s section", section_name(t));
+  }
+  struct Sized {
+    uint32_t type;
+    uint64_t record;
+  };
+  const Sized sized[] = {{kSectionProbes, sizeof(ProbeRecord)},
+                         {kSectionProbeSets, sizeof(ProbeSetRecord)},
+                         {kSectionProbeEntries, sizeof(ProbeEntry)}};
+  for (const Sized& z : sized) {
+    if (sections_[z.type].length % z.record != 0) {
+      return fail(Status::kCorrupt,
+                  "%s section: %llu bytes, not a whole number of %llu-byte records",
+                  section_name(z.type), static_cast<unsigned long long>(sections_[z.type].length),
+                  static_cast<unsigned long long>(z.record));
+    }
+  }
+  const uint64_t probe_count = probes.length / sizeof(ProbeRecord);
+  if (probe_count == 0) return fail(Status::kCorrupt, "probes section: no probes");
+  if (probe_count > kMaxProbes) {
+    return fail(Status::kCorrupt, "probes section: %llu probes, over the limit of %u",
+                static_cast<unsigned long long>(probe_count), kMaxProbes);
+  }
+  // Sets and entries are bounded by the file's size (and so fit 32 bits: a set is 16 bytes, an
+  // entry 112, and the file is addressed by 64-bit offsets, so check).
+  const uint64_t set_count = sets.length / sizeof(ProbeSetRecord);
+  const uint64_t entry_count = entries.length / sizeof(ProbeEntry);
+  if (set_count > 0xFFFFFFFFu || entry_count > 0xFFFFFFFFu) {
+    return fail(Status::kCorrupt, "probe sets or entries: more than 2^32 records");
+  }
+  out->probe_count = uint32_t(probe_count);
+  out->probe_set_count = uint32_t(set_count);
+  out->probe_entry_count = uint32_t(entry_count);
+  out->probe_bytes = probes.length + sets.length + entries.length;
+  if (grid.present) {
+    if (grid.length < sizeof(ProbeGridRecord)) {
+      return fail(Status::kCorrupt, "probe grid section: %llu bytes, shorter than its record",
+                  static_cast<unsigned long long>(grid.length));
+    }
+    const ProbeGridRecord& g = *at<ProbeGridRecord>(grid.offset);
+    // The product grows one factor at a time and stops at the limit: no overflow (each factor
+    // is 32 bits, the running product at most 2^22).
+    uint64_t points = 1;
+    for (int a = 0; a < 3; ++a) {
+      if (g.size[a] == 0)
+        return fail(Status::kCorrupt, "probe grid: size %ux%ux%u has an empty axis", g.size[0],
+                    g.size[1], g.size[2]);
+      points *= g.size[a];
+      if (points > kMaxProbeGridPoints) {
+        return fail(Status::kCorrupt, "probe grid: size %ux%ux%u over the limit of %u points",
+                    g.size[0], g.size[1], g.size[2], kMaxProbeGridPoints);
+      }
+    }
+    if (grid.length != sizeof(ProbeGridRecord) + points * 4) {
+      return fail(Status::kCorrupt,
+                  "probe grid section: %llu bytes, expected %llu for %llu grid points",
+                  static_cast<unsigned long long>(grid.length),
+                  static_cast<unsigned long long>(sizeof(ProbeGridRecord) + points * 4),
+                  static_cast<unsigned long long>(points));
+    }
+    out->probe_grid_points = uint32_t(points);
+    out->probe_bytes += grid.length;
+  }
+  return Status::kOk;
+}
+
+// The probe records (after the checksum; sizes checked by check_probe_sections).
+Status Validator::check_probes(const Header& h, Parsed* out) {
+  if (!sections_[kSectionProbes].present) return Status::kOk;
+  const uint32_t n = out->probe_count;
+  const ProbeRecord* probes = at<ProbeRecord>(sections_[kSectionProbes].offset);
+  for (uint32_t i = 0; i < n; ++i) {
+    const ProbeRecord& p = probes[i];
+    if (!all_finite(p.position, 3))
+      return fail(Status::kCorrupt, "probe %u: position is not finite", i);
+    for (int k = 0; k < 6; ++k) {
+      if (!finite_non_negative(p.reach[k]))
+        return fail(Status::kCorrupt, "probe %u: reach %d is not finite and >= 0", i, k);
+    }
+    if (p.name_length == 0 && p.name_offset != 0)
+      return fail(Status::kCorrupt, "probe %u: unnamed with a name offset %u", i, p.name_offset);
+    if (Status s = check_name("probe", i, p.name_offset, p.name_length, true); s != Status::kOk)
+      return s;
+    if (p.reserved != 0) return fail(Status::kCorrupt, "probe %u: reserved field not zero", i);
+  }
+  const ProbeGridRecord* grid = nullptr;
+  if (sections_[kSectionProbeGrid].present) {
+    grid = at<ProbeGridRecord>(sections_[kSectionProbeGrid].offset);
+    if (!all_finite(grid->origin, 3))
+      return fail(Status::kCorrupt, "probe grid: origin is not finite");
+    if (!std::isfinite(grid->spacing) || !(grid->spacing > 0.0f))
+      return fail(Status::kCorrupt, "probe grid: spacing is not finite and > 0");
+    if (grid->reserved != 0) return fail(Status::kCorrupt, "probe grid: reserved field not zero");
+    const uint32_t* index = at<uint32_t>(sections_[kSectionProbeGrid].offset + sizeof(*grid));
+    for (uint32_t k = 0; k < out->probe_grid_points; ++k) {
+      if (index[k] != kNone32 && index[k] >= n) {
+        return fail(Status::kCorrupt, "probe grid: point %u names probe %u of %u", k, index[k], n);
+      }
+    }
+  }
+  const ProbeSetRecord* sets = at<ProbeSetRecord>(sections_[kSectionProbeSets].offset);
+  const ProbeEntry* entries = at<ProbeEntry>(sections_[kSectionProbeEntries].offset);
+  uint32_t expected_first = 0;
+  for (uint32_t i = 0; i < out->probe_set_count; ++i) {
+    const ProbeSetRecord& s = sets[i];
+    if (s.kind > kGroupKindMax || s.kind == kGroupPairCorrection) {
+      return fail(Status::kCorrupt, "probe set %u: kind %u (%s) has no probe sets", i, s.kind,
+                  group_kind_name(s.kind));
+    }
+    if (!owner_ok(s.kind, s.light, s.object_a, s.object_b, h)) {
+      return fail(Status::kCorrupt, "probe set %u (%s): owner light %u objects %u,%u invalid", i,
+                  group_kind_name(s.kind), s.light, s.object_a, s.object_b);
+    }
+    if (i > 0 && group_key(sets[i - 1]) >= group_key(s)) {
+      return fail(Status::kCorrupt,
+                  "probe set %u: not sorted after probe set %u (or a duplicate owner)", i, i - 1);
+    }
+    if (s.entry_count == 0) return fail(Status::kCorrupt, "probe set %u: no entries", i);
+    if (s.first_entry != expected_first) {
+      return fail(Status::kCorrupt,
+                  "probe set %u: first entry %u, expected %u (sets must be contiguous)", i,
+                  s.first_entry, expected_first);
+    }
+    if (!range_inside(s.first_entry, s.entry_count, 0, out->probe_entry_count)) {
+      return fail(Status::kCorrupt, "probe set %u: entries %u+%u exceed the %u entries", i,
+                  s.first_entry, s.entry_count, out->probe_entry_count);
+    }
+    for (uint32_t k = s.first_entry; k < s.first_entry + s.entry_count; ++k) {
+      const ProbeEntry& e = entries[k];
+      if (e.probe >= n) {
+        return fail(Status::kCorrupt, "probe entry %u: probe %u out of range (%u probes)", k,
+                    e.probe, n);
+      }
+      if (k > s.first_entry && entries[k - 1].probe >= e.probe) {
+        return fail(Status::kCorrupt, "probe entry %u: probe %u not after probe %u in probe set %u",
+                    k, e.probe, entries[k - 1].probe, i);
+      }
+      if (!all_finite(e.sh, kProbeShCount * 3))
+        return fail(Status::kCorrupt, "probe entry %u: SH coefficient not finite", k);
+    }
+    expected_first = s.first_entry + s.entry_count;
+  }
+  if (expected_first != out->probe_entry_count) {
+    return fail(Status::kCorrupt, "probe sets cover %u of %u probe entries", expected_first,
+                out->probe_entry_count);
+  }
+  out->probes = probes;
+  out->probe_grid = grid;
+  out->probe_sets = sets;
+  out->probe_entries = entries;
   return Status::kOk;
 }
 
@@ -291,6 +512,8 @@ Status Validator::run(Parsed* out) {
     }
   }
 
+  if (Status s = check_probe_sections(out); s != Status::kOk) return s;
+
   // Checksum before the records are interpreted (a flipped byte is reported as such).
   uint32_t crc = crc32(entries, uint64_t(h.section_count) * sizeof(SectionEntry));
   for (uint32_t i = 0; i < h.section_count; ++i) {
@@ -359,29 +582,9 @@ Status Validator::run(Parsed* out) {
   uint32_t expected_first = 0;
   for (uint32_t i = 0; i < h.group_count; ++i) {
     const GroupRecord& g = groups[i];
-    const bool light_ok = g.light < h.light_count;
-    const bool a_ok = g.object_a < h.object_count;
-    const bool b_ok = g.object_b < h.object_count;
-    bool ok = false;
-    switch (g.kind) {
-      case kGroupBase:
-        ok = g.light == kNone16 && g.object_a == kNone16 && g.object_b == kNone16;
-        break;
-      case kGroupContribution:
-        ok = light_ok && g.object_a == kNone16 && g.object_b == kNone16;
-        break;
-      case kGroupShadow:
-        ok = light_ok && a_ok && g.object_b == kNone16;
-        break;
-      case kGroupPairCorrection:
-        ok = light_ok && a_ok && b_ok && g.object_a < g.object_b;
-        break;
-      case kGroupStaticShadow:
-        ok = g.light == kNone16 && a_ok && g.object_b == kNone16;
-        break;
-      default:
-        return fail(Status::kCorrupt, "group %u: unknown kind %u", i, g.kind);
-    }
+    if (g.kind > kGroupKindMax)
+      return fail(Status::kCorrupt, "group %u: unknown kind %u", i, g.kind);
+    const bool ok = owner_ok(g.kind, g.light, g.object_a, g.object_b, h);
     if (!ok) {
       return fail(Status::kCorrupt, "group %u (%s): owner light %u objects %u,%u invalid", i,
                   group_kind_name(g.kind), g.light, g.object_a, g.object_b);
@@ -522,6 +725,7 @@ Status Validator::run(Parsed* out) {
     }
   }
 
+  if (Status s = check_probes(h, out); s != Status::kOk) return s;
   if (Status s = check_limits(h); s != Status::kOk) return s;
 
   out->header = &h;
@@ -557,6 +761,17 @@ Status PackView::open(const void* data, uint64_t size, const RecomposeLimits& li
   out->meshes_ = p.meshes;
   out->strings_ = p.strings;
   out->strings_length_ = p.strings_length;
+  out->probes_ = p.probes;
+  out->probe_grid_ = p.probe_grid;
+  out->probe_grid_indices_ =
+      p.probe_grid ? reinterpret_cast<const uint32_t*>(p.probe_grid + 1) : nullptr;
+  out->probe_sets_ = p.probe_sets;
+  out->probe_entries_ = p.probe_entries;
+  out->probe_count_ = p.probe_count;
+  out->probe_grid_points_ = p.probe_grid ? p.probe_grid_points : 0;
+  out->probe_set_count_ = p.probe_set_count;
+  out->probe_entry_count_ = p.probe_entry_count;
+  out->probe_bytes_ = p.probe_bytes;
   if (error != nullptr) *error = Error();
   return Status::kOk;
 }
@@ -569,6 +784,9 @@ Name PackView::object_name(uint32_t i) const {
 }
 Name PackView::mesh_name(uint32_t i) const {
   return Name{strings_ + meshes_[i].name_offset, meshes_[i].name_length};
+}
+Name PackView::probe_name(uint32_t i) const {
+  return Name{strings_ + probes_[i].name_offset, probes_[i].name_length};
 }
 
 const uint8_t* PackView::atlas_pixels(uint32_t i) const {
@@ -590,6 +808,13 @@ int32_t PackView::find_light(const char* name, uint32_t length) const {
 int32_t PackView::find_object(const char* name, uint32_t length) const {
   for (uint32_t i = 0; i < object_count(); ++i) {
     if (object_name(i).equals(name, length)) return static_cast<int32_t>(i);
+  }
+  return -1;
+}
+int32_t PackView::find_probe(const char* name, uint32_t length) const {
+  if (length == 0) return -1;  // grid probes have no name
+  for (uint32_t i = 0; i < probe_count(); ++i) {
+    if (probe_name(i).equals(name, length)) return static_cast<int32_t>(i);
   }
   return -1;
 }

@@ -236,6 +236,9 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   limits_ = limits;
   Status s = planner_.init(pack_, limits.planner, error);
   if (s != Status::kOk) return s;
+  // The planner's wanted state starts at the authored defaults, and so does this one.
+  s = wanted_.init(pack_, error);
+  if (s != Status::kOk) return s;
   // The presentation scale: the smallest power of two that brings the authored state's bound
   // below the ceiling.
   const float bound = planner_.wanted_map_bound();
@@ -591,7 +594,9 @@ LightState Runtime::light(uint32_t i) const {
 }
 
 Status Runtime::set_light(uint32_t i, const LightState& state) {
-  return planner_.set_light(i, state.on, state.color, state.intensity);
+  const Status s = planner_.set_light(i, state.on, state.color, state.intensity);
+  if (s == Status::kOk) wanted_.set_light(i, state);
+  return s;
 }
 Status Runtime::set_light_on(uint32_t i, bool on) {
   assert(i < light_count() && "set_light_on: light index out of range");
@@ -615,7 +620,9 @@ Status Runtime::set_light_intensity(uint32_t i, float intensity) {
   return set_light(i, s);
 }
 Status Runtime::set_object_visible(uint32_t i, bool visible) {
-  return planner_.set_object_visible(i, visible);
+  const Status s = planner_.set_object_visible(i, visible);
+  if (s == Status::kOk) wanted_.set_object_visible(i, visible);
+  return s;
 }
 
 void Runtime::set_draw_state() const {

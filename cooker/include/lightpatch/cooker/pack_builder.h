@@ -33,8 +33,15 @@ struct PackOptions {
   bool fill_alpha = true;
 };
 
-// Builds the pack bytes. Statistics and the encoding decision go into `report`.
+struct ProbeBake;  // probes.h
+
+// Builds the pack bytes. Statistics and the encoding decision go into `report` ("pack"; the light
+// probes' counts and bytes under "pack"/"probes"). `probes` (optional) adds the light-probe
+// sections: its sets are sorted by owner and empty ones dropped; a set's light and object are the
+// pack's light (BakedMaps::lights index) and object indices. CookError for probes the format
+// cannot hold (over pack::kMaxProbes, a grid index out of range, two sets of one owner).
 std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const BakedMaps& maps,
-                                const PackOptions& options, Report& report);
+                                const PackOptions& options, Report& report,
+                                const ProbeBake* probes = nullptr);
 
 }  // namespace lightpatch::cooker

@@ -1,6 +1,6 @@
-// Counters of heap allocations and GL object creations, kept by interposers in counters.cpp
-// (this test binary's own definitions of operator new, malloc and glGen*/glCreate* forward to the
-// real ones and count while counting is on).
+// Counters of heap allocations and GL object creations, kept by interposers:
+// support/allocation_counters.cpp (operator new, malloc) and, in the GLES tests, gles/counters.cpp
+// (glGen*/glCreate*); each forwards to the real function and counts while counting is on.
 #pragma once
 
 #include <atomic>
