@@ -125,7 +125,18 @@ void check_map(const FloatImage& m, const Layout& layout, int channels_a, int ch
 
 // The probe bake as pack records (pack_format.h, "Light probes"): names into the strings, sets
 // sorted by owner with kNone16 for "none", their entries concatenated in that order.
-void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count, PackContents& c) {
+// An entry whose irradiance stays below `threshold` (the significance of its set's maps) in every
+// direction: |Y_k| <= 0.631 for every basis function, so this bounds it.
+bool negligible(const ProbeEntry& e, float threshold) {
+  float bound[3] = {0, 0, 0};
+  for (uint32_t k = 0; k < kProbeShCount; ++k)
+    for (int ch = 0; ch < 3; ++ch) bound[ch] += 0.631f * std::abs(e.sh[k * 3 + ch]);
+  return std::max({bound[0], bound[1], bound[2]}) < threshold;
+}
+
+void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count,
+                const std::vector<float>& light_threshold, float base_threshold,
+                PackContents& c) {
   if (bake.probes.empty()) return;
   if (bake.probes.size() > kMaxProbes) {
     throw CookError(std::to_string(bake.probes.size()) + " light probes, over the format's " +
@@ -178,11 +189,13 @@ void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count, 
     ProbeSetRecord r = sets[i].first;
     if (i > 0 && key(sets[i - 1].first) == key(r)) throw CookError("two probe sets of one owner");
     r.first_entry = uint32_t(c.probe_entries.size());
-    r.entry_count = uint32_t(sets[i].second->entries.size());
-    c.probe_entries.insert(c.probe_entries.end(), sets[i].second->entries.begin(),
-                           sets[i].second->entries.end());
+    // The patches' rule: what stays below the set's significance is not stored.
+    const float threshold = r.light == kNone16 ? base_threshold : light_threshold[r.light];
+    for (const ProbeEntry& e : sets[i].second->entries)
+      if (!negligible(e, threshold)) c.probe_entries.push_back(e);
     if (c.probe_entries.size() > 0xFFFFFFFFu) throw CookError("too many probe entries");
-    c.probe_sets.push_back(r);
+    r.entry_count = uint32_t(c.probe_entries.size() - r.first_entry);
+    if (r.entry_count > 0) c.probe_sets.push_back(r);
   }
 }
 
@@ -640,7 +653,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     }
   }
 
-  if (probes != nullptr) add_probes(*probes, c.lights.size(), c.objects.size(), c);
+  if (probes != nullptr)
+    add_probes(*probes, c.lights.size(), c.objects.size(), light_threshold, base_threshold, c);
 
   std::vector<uint8_t> bytes = write_pack(c);
   {

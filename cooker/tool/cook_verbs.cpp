@@ -89,6 +89,9 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.bake.threads = args.int_option("--threads", 0, 1, 1024);
   o.bake.plan_effects = !args.flag("--no-plan");
   o.bake.output_step = args.float_option("--output-step", 0.0f, 1e-30f, 1e30f);
+  o.bake.probes.enabled = !args.flag("--no-probes");
+  o.bake.probes.spacing = args.float_option("--probe-spacing", 0.0f, 1e-3f, 1e6f);
+  o.bake.probes.rays = args.int_option("--probe-rays", 0, 1, 65536);
   o.quiet = args.flag("--quiet", "-q");
   o.layout.align = layout_align(o.bake);
   o.layout.align_required = o.bake.indirect_scale > 0;

@@ -56,6 +56,13 @@ constexpr const char* kCookOptionsHelp =
     "                         traced and kept, every measured overlap correction kept, tinted\n"
     "                         patches kept at 3 channels (for bake-state: every object's bounce)\n"
 
+    "  --no-probes            no light probes (default: probes on a grid of the scene's free\n"
+    "                         space and at nodes with extras \"lightProbe\": true, lit per light\n"
+    "                         and object like the maps; README, \"Light probes\")\n"
+    "  --probe-spacing M      probe grid spacing in metres (default 1, coarser where the scene\n"
+    "                         would need more than 65,536 grid points)\n"
+    "  --probe-rays N         gather rays per probe (preset: draft 256, preview 512, production\n"
+    "                         1024)\n"
     "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
     "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
     "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
@@ -219,7 +226,8 @@ const Verb kVerbs[] = {
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
-     "[--output-step E] [--seed N] [--threads N] [--quiet]",
+     "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--seed N] "
+     "[--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,

@@ -141,8 +141,10 @@ std::vector<uint8_t> CookJobs::assemble(std::vector<GroupBake> results, Progress
                                         Report& report, BakedMaps* maps_out) const {
   BakedMaps maps = session_->assemble(std::move(results), report);
   finalize_maps(maps, p_, progress, report);
+  const ProbeBake probes = cook_probes(p_, maps, bake_, progress, report);
   progress.begin("pack", 1);
-  std::vector<uint8_t> pack = build_pack(p_.scene, p_.layout, maps, pack_options(bake_), report);
+  std::vector<uint8_t> pack =
+      build_pack(p_.scene, p_.layout, maps, pack_options(bake_), report, &probes);
   report.stage_time("pack", progress.end());
   if (maps_out) *maps_out = std::move(maps);
   return pack;
