@@ -135,8 +135,7 @@ bool negligible(const ProbeEntry& e, float threshold) {
 }
 
 void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count,
-                const std::vector<float>& light_threshold, float base_threshold,
-                PackContents& c) {
+                const std::vector<float>& light_threshold, float base_threshold, PackContents& c) {
   if (bake.probes.empty()) return;
   if (bake.probes.size() > kMaxProbes) {
     throw CookError(std::to_string(bake.probes.size()) + " light probes, over the format's " +
