@@ -324,6 +324,31 @@ TEST(ImportGltf, ExtrasAcceptBlenderStyleNumbersAndIgnoreFalse) {
   EXPECT_FLOAT_EQ(mesh_named(s, "pillar").lightmap_scale, 1.0f);
 }
 
+// Blender exports a light probe as an empty with a custom property (1, not true), often parented
+// to something moved: the probe is the empty's world origin, named after it.
+TEST(ImportGltf, LightProbeEmptiesArePlacedAtTheirWorldOrigin) {
+  ScratchDir dir;
+  GltfParts parts = parts_of(small_room());
+  auto& nodes = parts.json["nodes"];
+  nodes.push_back({{"name", "probe_by_the_door"},
+                   {"translation", {0.5, 1.0, 0.0}},
+                   {"extras", {{"lightProbe", 1}}}});
+  nodes.push_back({{"name", "probe_group"},
+                   {"translation", {1.0, 0.0, -1.0}},
+                   {"scale", {2.0, 2.0, 2.0}},
+                   {"children", {int(nodes.size()) - 1}}});
+  nodes.push_back({{"name", "not_a_probe"}, {"extras", {{"lightProbe", 0}}}});
+  auto& roots = parts.json["scenes"][0]["nodes"];
+  roots.push_back(int(nodes.size()) - 2);
+  roots.push_back(int(nodes.size()) - 1);
+  const Scene s = cooker::import_gltf(write_glb(dir, "probes", parts));
+  ASSERT_EQ(s.probes.size(), 1u);
+  EXPECT_EQ(s.probes[0].name, "probe_by_the_door");
+  EXPECT_NEAR(s.probes[0].position.x, 2.0f, 1e-6f);
+  EXPECT_NEAR(s.probes[0].position.y, 2.0f, 1e-6f);
+  EXPECT_NEAR(s.probes[0].position.z, -1.0f, 1e-6f);
+}
+
 TEST(ImportGltf, ExtrasOfTheWrongTypeAreErrorsNamingTheNode) {
   ScratchDir dir;
   // A string where a boolean belongs would otherwise bake the node static without a word.
@@ -331,6 +356,7 @@ TEST(ImportGltf, ExtrasOfTheWrongTypeAreErrorsNamingTheNode) {
       {{{"semiDynamic", "true"}}, "extras.semiDynamic"},
       {{{"semiDynamic", 2}}, "extras.semiDynamic"},
       {{{"lightmapExclude", "yes"}}, "extras.lightmapExclude"},
+      {{{"lightProbe", "yes"}}, "extras.lightProbe"},
       {{{"lightmapScale", 0}}, "extras.lightmapScale"},
       {{{"lightmapScale", "2"}}, "extras.lightmapScale"}};
   for (const auto& [extras, word] : cases) {
