@@ -268,12 +268,12 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
                                     rt.width(), rt.height(), 0.1f, 3.0f);
       r.meter_before = meter.measure(rt, meter_texels);
       r.item_before = measure_item(s, view, &steady, &steady_probes, &r.item);
-      r.bound = change_latency_bound(rt, s.pack, s.budget, light, -1);
+      bool on = true;
+      if (r.action == "light" && st.contains("state") && st["state"].contains("lights") &&
+          st["state"]["lights"].contains(r.node))
+        on = st["state"]["lights"][r.node].value("on", true);
+      r.bound = change_latency_bound(rt, s.pack, s.budget, light, -1, !on);
       if (r.action == "light") {
-        bool on = true;
-        if (st.contains("state") && st["state"].contains("lights") &&
-            st["state"]["lights"].contains(r.node))
-          on = st["state"]["lights"][r.node].value("on", true);
         applied = game.set_light_on(static_cast<uint32_t>(light), on);
       } else {
         game.complete_spell();
@@ -282,14 +282,14 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
       object = rt.find_object(r.node.c_str());
       if (object < 0)
         throw std::runtime_error("step " + r.name + ": the pack has no object '" + r.node + "'");
-      r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object);
+      r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object, false);
       applied = game.take(static_cast<uint32_t>(object));
     } else if (r.action == "place") {
       object = rt.find_object(r.node.c_str());
       applied = false;
       for (uint32_t k = 0; k < game.items().size() && object >= 0; ++k) {
         if (game.items()[k].placed == static_cast<uint32_t>(object)) {
-          r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object);
+          r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object, false);
           applied = game.place(k);
         }
       }
