@@ -117,19 +117,27 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris,
   EXPECT_GT(2 * off, s.semi_lights);
   for (const auto& [name, o] : inn.state["objects"].items())
     EXPECT_TRUE(s.object_nodes.count(name)) << name;
-  // Scenario: every step names a node of the scene; each off light is lit once; ends with the
-  // spell.
+  // Scenario: every step names a node of the scene; each off light is lit once, besides the
+  // close-ups with the carried item (a candle beside it snuffed and lit again, then a candle of
+  // another room); ends with the spell.
   const json& steps = inn.scenario["steps"];
   ASSERT_GE(steps.size(), 3u);
-  std::size_t lit = 0, placed = 0;
+  std::size_t lit = 0, placed = 0, close_ups = 0;
   for (const auto& step : steps) {
     if (step.contains("node")) {
       EXPECT_TRUE(s.names.count(step["node"].get<std::string>())) << step.dump();
     }
-    lit += step["action"] == "light" ? 1u : 0u;
+    const bool close_up = step.contains("held_item");
+    if (close_up) {
+      EXPECT_EQ(step["action"], "light");
+      EXPECT_TRUE(step.value("close_up", false));
+    }
+    close_ups += close_up ? 1u : 0u;
+    lit += step["action"] == "light" && !close_up ? 1u : 0u;
     placed += step["action"] == "place" ? 1u : 0u;
   }
   EXPECT_EQ(lit, off);
+  EXPECT_EQ(close_ups, 4u);
   EXPECT_EQ(placed, inn.stats.items);
   EXPECT_EQ(steps.front()["action"], "start");
   EXPECT_EQ(steps.back()["action"], "spell_done");

@@ -157,6 +157,10 @@ class InnBuilder {
   void full_layout();
   void small_layout();
   void dining_props(Room& r, int tables, bool full);
+  // Steps with the first item carried beside a candle that is snuffed and lit again, then a
+  // light of another room snuffed and lit again (close-ups: the carried item is lit by the light
+  // probes).
+  void carried_item_close_up(const std::string& item);
   void scenario_step(const std::string& name, const std::string& action, const std::string& node,
                      Json state);
 
@@ -524,6 +528,54 @@ void InnBuilder::scenario_step(const std::string& name, const std::string& actio
   steps_.push_back(std::move(s));
 }
 
+void InnBuilder::carried_item_close_up(const std::string& item) {
+  // The candle nearest the item in its room, and the candle of another room farthest from it (a
+  // small light that reaches no probe there; a fire shines through the door).
+  const auto& [item_room, item_pos] = where_.at(item);
+  std::string candle, far;
+  float near_d = INFINITY, far_d = -1.0f;
+  for (const std::string& l : semi_lights_) {
+    const auto& [room_name, pos] = where_.at(l);
+    const float d = glm::length(pos - item_pos);
+    if (room_name == item_room && l.rfind("candle", 0) == 0 && d < near_d) {
+      near_d = d;
+      candle = l;
+    }
+  }
+  if (candle.empty()) return;
+  const glm::vec3 flame = where_.at(candle).second;
+  for (const std::string& l : semi_lights_) {
+    const auto& [room_name, pos] = where_.at(l);
+    const float d = glm::length(pos - flame);
+    if (room_name != item_room && l.rfind("candle", 0) == 0 && d > far_d) {
+      far_d = d;
+      far = l;
+    }
+  }
+  // The camera a little above and in front of the flame (towards the room's centre), looking at
+  // it, so that the carried item, held at the lower right of the view, is about 0.3 m from it.
+  const Room& r = room(item_room);
+  glm::vec3 toward = r.center() - flame;
+  toward.y = 0.0f;
+  toward = glm::length(toward) > 1e-3f ? glm::normalize(toward) : glm::vec3(1, 0, 0);
+  const glm::vec3 cam = flame + toward * 0.62f + glm::vec3(0.0f, 0.4f, 0.0f);
+  auto close_up = [&](const std::string& name, const std::string& light, bool on,
+                      const char* held_item) {
+    scenario_step(name, "light", light, Json{{"lights", {{light, {{"on", on}}}}}});
+    Json& st = steps_.back();
+    st["camera"] = {cam.x, cam.y, cam.z};
+    st["focus"] = {flame.x, flame.y, flame.z};
+    st["close_up"] = true;
+    // What the step shows of the carried item's probe light (the inn's tests check it).
+    st["held_item"] = held_item;
+  };
+  close_up("snuff_" + candle + "_by_" + item, candle, false, "near_light_off");
+  close_up("light_" + candle + "_by_" + item, candle, true, "near_light_on");
+  if (far.empty()) return;
+  close_up("snuff_" + far + "_far_from_" + item, far, false, "other_room_light");
+  close_up("light_" + far + "_far_from_" + item, far, true, "other_room_light");
+}
+
 void InnBuilder::small_layout() {
   rooms_.push_back({.name = "dining", .min = {0, 0, 0}, .max = {6, 3, 5}});
   rooms_.push_back({.name = "living_main", .min = {6.25f, 0, 0}, .max = {11, 3, 5}});
@@ -774,6 +826,7 @@ Inn InnBuilder::build() {
   for (std::size_t i = 0; i < items_.size(); ++i) {
     scenario_step("take_" + items_[i], "take", items_[i],
                   Json{{"objects", {{items_[i], {{"visible", false}}}}}});
+    if (i == 0) carried_item_close_up(items_[i]);
     scenario_step("place_" + items_[i], "place", placed_[i],
                   Json{{"objects", {{placed_[i], {{"visible", true}}}}}});
   }

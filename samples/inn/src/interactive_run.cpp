@@ -8,6 +8,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "held_item.h"
 #include "lightpatch/platform/clock.h"
 #include "lightpatch/platform/gl.h"
 #include "player.h"
@@ -127,6 +128,13 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
       std::fprintf(stderr, "lightpatch-inn: runtime update failed: %s\n", status_name(status));
       return 1;
     }
+    // After the game's changes of this frame (a few thousand comparisons and the changed sets'
+    // entries; no GL work).
+    if (s.probes.update(rt.state()) != Status::kOk) {
+      std::fprintf(stderr, "lightpatch-inn: light probe update failed\n");
+      return 1;
+    }
+    const HeldItem held = hold_item(game, s.world, s.probes, player.view());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     game.flame_glow(flames.data());
     game.shown_objects(visible.data());
@@ -142,6 +150,9 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     f.exposure = o.exposure * rt.light_map_scale();
     f.viewport_width = width;
     f.viewport_height = height;
+    f.held_object = held.object;
+    f.held_model = held.model;
+    f.held_sh = held.sh;
     s.renderer.draw(f);
 
     const FrameStats& st = rt.stats();
@@ -149,13 +160,14 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
         frame_ms_smoothed == 0.0 ? real_ms : 0.9 * frame_ms_smoothed + 0.1 * real_ms;
     recompose_ms_smoothed = 0.9 * recompose_ms_smoothed + 0.1 * platform::elapsed_ms(r0, r1);
     const InnGame::Target target = game.target(player.eye(), player.forward());
-    char stats[200];
+    char stats[240];
     std::snprintf(stats, sizeof stats,
                   "%.1f ms/frame (%.0f fps; runtime update %.2f ms), %llu texels recomposed, "
-                  "%u pending%s",
+                  "%u pending%s, light probes %llu entries",
                   frame_ms_smoothed, frame_ms_smoothed > 0.0 ? 1e3 / frame_ms_smoothed : 0.0,
                   recompose_ms_smoothed, static_cast<unsigned long long>(st.texels),
-                  st.pending_changes, st.rebuild_active ? ", rebuilding" : "");
+                  st.pending_changes, st.rebuild_active ? ", rebuilding" : "",
+                  static_cast<unsigned long long>(s.probes.stats().entries_last_update));
     std::string text = game.objective();
     if (target.kind != InnGame::Target::kNone) text += "\n[E] " + target.label;
     if (time_s < message_until) text += "\n" + message;

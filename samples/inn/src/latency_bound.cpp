@@ -30,12 +30,12 @@ uint32_t rebuild_frames_bound(const PackView& pack, uint64_t texels, uint64_t bu
 }
 
 uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint64_t budget,
-                              int32_t light, int32_t object) {
+                              int32_t light, int32_t object, bool dims) {
   const Planner& p = runtime.planner();
   const bool rebuilding = !runtime.ready() || runtime.stats().rebuild_active;
   const uint64_t cost = light >= 0 ? p.light_change_texels(static_cast<uint32_t>(light))
                                    : p.object_change_texels(static_cast<uint32_t>(object));
-  if (!rebuilding && cost <= budget && cost < p.rebuild_texels()) return 1;
+  if (!rebuilding && !dims && cost <= budget && cost < p.rebuild_texels()) return 1;
   // Everything the pack could draw: a rebuild never costs more.
   uint64_t all = uint64_t(pack.lightmap_width()) * pack.lightmap_height();
   for (uint32_t g = 0; g < pack.group_count(); ++g) all += group_area(pack, g);

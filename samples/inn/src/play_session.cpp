@@ -59,6 +59,9 @@ std::unique_ptr<PlaySession> open_session(const PlayOptions& options) {
   if (s->runtime.open(s->pack, limits, &error) != Status::kOk) {
     throw std::runtime_error(options.pack + ": " + error.message);
   }
+  if (s->probes.init(s->pack, &error) != Status::kOk) {
+    throw std::runtime_error(options.pack + ": light probes: " + error.message);
+  }
   // Default budget: half the light map's area headless (every scripted change lands in one
   // frame); in a window at most 2^18 texels, about 8 ms of llvmpipe on two cores, which with the
   // drawing of the inn at 960x540 keeps a frame near 27 ms of CPU time (README, the demo).

@@ -12,6 +12,7 @@
 #include "collision_grid.h"
 #include "gltf_scene.h"
 #include "inn_game.h"
+#include "lightpatch/light_probes.h"
 #include "lightpatch/pack_view.h"
 #include "lightpatch/platform/egl_context.h"
 #include "lightpatch/platform/file_mapping.h"
@@ -51,6 +52,9 @@ struct PlaySession {
   platform::FileMapping mapping;
   PackView pack;
   Runtime runtime;
+  // The pack's light probes, for the carried item (HeldItem); each frame, after the game changed
+  // the runtime's wanted state: probes.update(runtime.state()). Empty for a pack without probes.
+  LightProbes probes;
   World world;
   std::unique_ptr<CollisionGrid> grid;
   SceneRenderer renderer;

@@ -1,5 +1,5 @@
 // Ray casting against the world's triangles (brute force: for the scripted run's camera placement
-// and light probes, a few dozen rays per step, never per frame).
+// and the light meter, a few dozen rays per step, never per frame).
 #pragma once
 
 #include <cstdint>

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdio>
+#include <string>
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -36,21 +37,12 @@ void main() {
 }
 )";
 
-const char* const kFragmentShader = R"(#version 300 es
+// The start of both fragment shaders: radiance exposed, tone mapped and sRGB-encoded (header).
+const char* const kFragmentOutput = R"(#version 300 es
 precision highp float;
-uniform sampler2D u_light_map;
-uniform sampler2D u_indirect_map;
 uniform float u_exposure;
-in vec2 v_lightmap_uv;
-in vec3 v_albedo;
-in vec3 v_emission;
 out vec4 o_color;
-void main() {
-  // L + I (pack_format.h, "Two target maps"): the indirect map's own bilinear filtering magnifies
-  // it; without one it is a black texel.
-  vec3 irradiance = max(texture(u_light_map, v_lightmap_uv).rgb +
-                        texture(u_indirect_map, v_lightmap_uv).rgb, vec3(0.0));
-  vec3 radiance = v_albedo * irradiance * 0.31830988 + v_emission;
+void write_color(vec3 radiance) {
   vec3 c = 1.0 - exp(-u_exposure * radiance);
   // sRGB transfer curve (the framebuffer is a plain 8-bit one).
   vec3 lo = c * 12.92;
@@ -59,10 +51,59 @@ void main() {
 }
 )";
 
+const char* const kFragmentShader = R"(
+uniform sampler2D u_light_map;
+uniform sampler2D u_indirect_map;
+in vec2 v_lightmap_uv;
+in vec3 v_albedo;
+in vec3 v_emission;
+void main() {
+  // L + I (pack_format.h, "Two target maps"): the indirect map's own bilinear filtering magnifies
+  // it; without one it is a black texel.
+  vec3 irradiance = max(texture(u_light_map, v_lightmap_uv).rgb +
+                        texture(u_indirect_map, v_lightmap_uv).rgb, vec3(0.0));
+  write_color(v_albedo * irradiance * 0.31830988 + v_emission);
+}
+)";
+
+// The carried item: its baked triangles moved by u_model, lit by the light probes' irradiance SH.
+const char* const kHeldVertexShader = R"(#version 300 es
+uniform mat4 u_view_projection;
+uniform mat4 u_model;
+in vec3 a_position;
+in vec2 a_lightmap_uv;  // unused: bound so that the attribute locations match the scene's
+in vec4 a_albedo;
+out vec3 v_position;
+out vec3 v_albedo;
+void main() {
+  vec4 p = u_model * vec4(a_position, 1.0);
+  gl_Position = u_view_projection * p;
+  v_position = p.xyz;
+  v_albedo = a_albedo.rgb;
+}
+)";
+
+const char* const kHeldFragmentShader = R"(
+uniform vec3 u_sh[9];  // irradiance SH per channel, lightpatch/spherical_harmonics.h's order
+in vec3 v_position;
+in vec3 v_albedo;
+void main() {
+  // The item's meshes carry no normals: the triangle's own, facing the camera.
+  vec3 n = normalize(cross(dFdx(v_position), dFdy(v_position)));
+  // E(n) = sum_k sh_k Y_k(n) with sh_basis()'s constants (spherical_harmonics.h), clamped at 0.
+  vec3 e = u_sh[0] * 0.282095 + (u_sh[1] * n.y + u_sh[2] * n.z + u_sh[3] * n.x) * 0.488603 +
+           (u_sh[4] * (n.x * n.y) + u_sh[5] * (n.y * n.z) + u_sh[7] * (n.x * n.z)) * 1.092548 +
+           u_sh[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) +
+           u_sh[8] * (0.546274 * (n.x * n.x - n.y * n.y));
+  write_color(v_albedo * max(e, vec3(0.0)) * 0.31830988);
+}
+)";
+
 }  // namespace
 
 SceneRenderer::~SceneRenderer() {
   if (program_) glDeleteProgram(program_);
+  if (held_program_) glDeleteProgram(held_program_);
   if (vao_) glDeleteVertexArrays(1, &vao_);
   if (vbo_) glDeleteBuffers(1, &vbo_);
   if (ibo_) glDeleteBuffers(1, &ibo_);
@@ -79,7 +120,8 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   }
   const char* const attributes[] = {"a_position", "a_lightmap_uv", "a_albedo",
                                     "a_emissive", "a_flame",       nullptr};
-  program_ = build_program(kVertexShader, kFragmentShader, attributes, message, message_size);
+  program_ = build_program(kVertexShader, (std::string(kFragmentOutput) + kFragmentShader).c_str(),
+                           attributes, message, message_size);
   if (!program_) return false;
   view_projection_location_ = glGetUniformLocation(program_, "u_view_projection");
   light_map_location_ = glGetUniformLocation(program_, "u_light_map");
@@ -94,6 +136,14 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   glBindTexture(GL_TEXTURE_2D, 0);
   exposure_location_ = glGetUniformLocation(program_, "u_exposure");
   flames_location_ = glGetUniformLocation(program_, "u_flames");
+  held_program_ =
+      build_program(kHeldVertexShader, (std::string(kFragmentOutput) + kHeldFragmentShader).c_str(),
+                    attributes, message, message_size);
+  if (!held_program_) return false;
+  held_view_projection_location_ = glGetUniformLocation(held_program_, "u_view_projection");
+  held_model_location_ = glGetUniformLocation(held_program_, "u_model");
+  held_sh_location_ = glGetUniformLocation(held_program_, "u_sh");
+  held_exposure_location_ = glGetUniformLocation(held_program_, "u_exposure");
 
   glGenVertexArrays(1, &vao_);
   glGenBuffers(1, &vbo_);
@@ -167,6 +217,15 @@ void SceneRenderer::draw(const Frame& frame) {
   draw_range(world_->static_range);
   for (size_t o = 0; o < world_->objects.size(); ++o) {
     if (frame.object_visible[o]) draw_range(world_->objects[o].range);
+  }
+  if (frame.held_object >= 0 && static_cast<size_t>(frame.held_object) < world_->objects.size()) {
+    glUseProgram(held_program_);
+    glUniformMatrix4fv(held_view_projection_location_, 1, GL_FALSE,
+                       glm::value_ptr(frame.view_projection));
+    glUniformMatrix4fv(held_model_location_, 1, GL_FALSE, glm::value_ptr(frame.held_model));
+    glUniform3fv(held_sh_location_, 9, frame.held_sh);
+    glUniform1f(held_exposure_location_, frame.exposure);
+    draw_range(world_->objects[static_cast<size_t>(frame.held_object)].range);
   }
   glBindVertexArray(0);
   glActiveTexture(GL_TEXTURE1);

@@ -6,6 +6,10 @@
 // Shading: the light map holds irradiance E (linear, the lights' units); a Lambertian surface of
 // albedo a has radiance a * E / pi. Radiance is exposed, tone mapped (1 - exp(-exposure * L)) and
 // encoded with the sRGB curve for an ordinary 8-bit framebuffer.
+//
+// The carried item (HeldItem) is drawn the same way, with the irradiance of the light probes
+// where it is instead of the light map: E(n) from the 9 SH coefficients per channel evaluated per
+// fragment for the triangle's normal, clamped at 0.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +39,11 @@ class SceneRenderer {
     const uint8_t* object_visible = nullptr;  // [object count]: draw the object?
     const float* flame = nullptr;             // [light count]: glow of the light's flame (0 = out)
     float exposure = 1.0f;
+    // The carried item: world object `held_object` (-1: none) moved by `held_model` and lit by
+    // the irradiance SH `held_sh` (27 floats, LightProbes::sample()'s layout).
+    int32_t held_object = -1;
+    glm::mat4 held_model{1.0f};
+    const float* held_sh = nullptr;
     int viewport_width = 0, viewport_height = 0;
   };
   // Draws into the currently bound framebuffer; clears it first.
@@ -46,6 +55,9 @@ class SceneRenderer {
   uint32_t black_ = 0;  // 1x1 zero texture sampled as the indirect map of packs without one
   int view_projection_location_ = -1, light_map_location_ = -1, exposure_location_ = -1,
       flames_location_ = -1, indirect_map_location_ = -1;
+  uint32_t held_program_ = 0;
+  int held_view_projection_location_ = -1, held_model_location_ = -1, held_sh_location_ = -1,
+      held_exposure_location_ = -1;
 };
 
 }  // namespace lightpatch::inn

@@ -12,8 +12,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "held_item.h"
 #include "latency_bound.h"
-#include "light_probe.h"
+#include "light_meter.h"
 #include "lightpatch/platform/clock.h"
 #include "lightpatch/platform/gl.h"
 #include "offscreen_target.h"
@@ -34,6 +35,8 @@ struct FrameRecord {
   uint32_t draws = 0, pending = 0, oldest_pending_frames = 0, completed = 0, max_latency = 0;
   bool rebuild_active = false, presented = false;
   uint32_t flicker_updates = 0;
+  uint64_t probe_entries = 0;  // LightProbes::update()'s cost this frame
+  uint32_t probe_sets = 0;     // probe sets whose factor changed
 };
 
 struct StepRecord {
@@ -41,7 +44,10 @@ struct StepRecord {
   uint64_t applied_frame = 0, landed_frame = 0;
   uint32_t latency = 0, bound = 0;
   bool landed = false;
-  float probe_before = -1.0f, probe_after = -1.0f;
+  float meter_before = -1.0f, meter_after = -1.0f;
+  // The carried item's light from the probes (unflickered state; -1: nothing carried).
+  std::string item;
+  ItemIrradiance item_before{-1.0f, -1.0f}, item_after{-1.0f, -1.0f};
   std::string screenshot, error;
 };
 
@@ -96,6 +102,35 @@ glm::vec3 frame_camera(const World& world, glm::vec3 camera, glm::vec3 focus) {
   return want;
 }
 
+// The light the carried item gets from the probes at the hand, for the game's base (unflickered)
+// light state: flicker would make two measurements of the same state differ. `steady` and
+// `probes` are the measurement's own state and probes, apart from the frame's.
+ItemIrradiance measure_item(const PlaySession& s, const glm::mat4& view, SceneState* steady,
+                            LightProbes* probes, std::string* item) {
+  ItemIrradiance r{-1.0f, -1.0f};
+  const HeldItem held = hold_item(*s.game, s.world, s.probes, view);
+  if (held.object < 0) return r;
+  *item = s.world.objects[static_cast<size_t>(held.object)].name;
+  if (steady->assign(s.runtime.state()) != Status::kOk) return r;
+  for (uint32_t l = 0; l < steady->light_count(); ++l) {
+    if (steady->set_light(l, s.game->base_light(l)) != Status::kOk) return r;
+  }
+  float sh[kProbeShFloats];
+  const float p[3] = {held.position.x, held.position.y, held.position.z};
+  if (probes->update(*steady) != Status::kOk || !probes->sample(p, sh)) return r;
+  // Facing the nearest light's flame.
+  glm::vec3 facing(0.0f, 1.0f, 0.0f);
+  float nearest = INFINITY;
+  for (const WorldLight& l : s.world.lights) {
+    const float d = glm::length(l.position - held.position);
+    if (d > 1e-4f && d < nearest) {
+      nearest = d;
+      facing = (l.position - held.position) / d;
+    }
+  }
+  return item_irradiance(sh, facing);
+}
+
 }  // namespace
 
 int run_scripted(PlaySession& s, const PlayOptions& o) {
@@ -106,8 +141,15 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   OffscreenTarget target;
   if (!target.init(o.width, o.height))
     throw std::runtime_error("cannot create the offscreen framebuffer");
-  LightProbe probe;
-  probe.init();
+  LightMeter meter;
+  meter.init();
+  SceneState steady;
+  LightProbes steady_probes;
+  {
+    Error e;
+    if (steady.init(s.pack, &e) != Status::kOk || steady_probes.init(s.pack, &e) != Status::kOk)
+      throw std::runtime_error(std::string("light probes: ") + e.message);
+  }
 
   const glm::mat4 projection =
       glm::perspective(glm::radians(70.0f),
@@ -130,9 +172,13 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     r.flicker_updates =
         flicker ? game.animate(static_cast<double>(frame_no) * kFrameSeconds, s.budget) : 0;
     const uint64_t r0 = platform::monotonic_ns();
-    const Status status = rt.update(s.budget);
+    Status status = rt.update(s.budget);
     glFinish();
     const uint64_t r1 = platform::monotonic_ns();
+    if (status == Status::kOk) status = s.probes.update(rt.state());
+    r.probe_entries = s.probes.stats().entries_last_update;
+    r.probe_sets = s.probes.stats().sets_changed_last_update;
+    const HeldItem held = hold_item(game, s.world, s.probes, view);
     target.bind();
     game.flame_glow(flames.data());
     game.shown_objects(visible.data());
@@ -145,6 +191,9 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     f.exposure = o.exposure * rt.light_map_scale();
     f.viewport_width = o.width;
     f.viewport_height = o.height;
+    f.held_object = held.object;
+    f.held_model = held.model;
+    f.held_sh = held.sh;
     s.renderer.draw(f);
     s.overlay.draw(caption.c_str(), 10, 10, o.height >= 400 ? 2.0f : 1.0f, o.width, o.height);
     glFinish();
@@ -202,26 +251,29 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     r.node = st.value("node", "");
     glm::vec3 eye, focus;
     if (step_camera(steps, i, &eye, &focus)) {
-      view = glm::lookAt(frame_camera(s.world, eye, focus), focus, glm::vec3(0, 1, 0));
+      // A close-up (the carried item held beside a light) looks from where the step says.
+      const glm::vec3 from = st.value("close_up", false) ? eye : frame_camera(s.world, eye, focus);
+      view = glm::lookAt(from, focus, glm::vec3(0, 1, 0));
     }
 
     int32_t light = -1, object = -1;
-    std::vector<glm::ivec2> probe_texels;
+    std::vector<glm::ivec2> meter_texels;
     bool applied = true;
     if (r.action == "light" || r.action == "spell_done") {
       light = rt.find_light(r.node.c_str());
       if (light < 0)
         throw std::runtime_error("step " + r.name + ": the pack has no light '" + r.node + "'");
-      probe_texels =
-          LightProbe::texels_around(s.world, s.world.lights[static_cast<size_t>(light)].position,
+      meter_texels =
+          LightMeter::texels_around(s.world, s.world.lights[static_cast<size_t>(light)].position,
                                     rt.width(), rt.height(), 0.1f, 3.0f);
-      r.probe_before = probe.measure(rt, probe_texels);
-      r.bound = change_latency_bound(rt, s.pack, s.budget, light, -1);
+      r.meter_before = meter.measure(rt, meter_texels);
+      r.item_before = measure_item(s, view, &steady, &steady_probes, &r.item);
+      bool on = true;
+      if (r.action == "light" && st.contains("state") && st["state"].contains("lights") &&
+          st["state"]["lights"].contains(r.node))
+        on = st["state"]["lights"][r.node].value("on", true);
+      r.bound = change_latency_bound(rt, s.pack, s.budget, light, -1, !on);
       if (r.action == "light") {
-        bool on = true;
-        if (st.contains("state") && st["state"].contains("lights") &&
-            st["state"]["lights"].contains(r.node))
-          on = st["state"]["lights"][r.node].value("on", true);
         applied = game.set_light_on(static_cast<uint32_t>(light), on);
       } else {
         game.complete_spell();
@@ -230,14 +282,14 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
       object = rt.find_object(r.node.c_str());
       if (object < 0)
         throw std::runtime_error("step " + r.name + ": the pack has no object '" + r.node + "'");
-      r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object);
+      r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object, false);
       applied = game.take(static_cast<uint32_t>(object));
     } else if (r.action == "place") {
       object = rt.find_object(r.node.c_str());
       applied = false;
       for (uint32_t k = 0; k < game.items().size() && object >= 0; ++k) {
         if (game.items()[k].placed == static_cast<uint32_t>(object)) {
-          r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object);
+          r.bound = change_latency_bound(rt, s.pack, s.budget, -1, object, false);
           applied = game.place(k);
         }
       }
@@ -306,7 +358,10 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
         r.error = "landed after its latency bound";
     }
     for (int k = 0; k < kSettleFrames; ++k) frame(r.name, true);
-    if (light >= 0) r.probe_after = probe.measure(rt, probe_texels);
+    if (light >= 0) {
+      r.meter_after = meter.measure(rt, meter_texels);
+      r.item_after = measure_item(s, view, &steady, &steady_probes, &r.item);
+    }
 
     char file[160];
     std::snprintf(file, sizeof file, "%02zu_%s.png", i, r.name.c_str());
@@ -372,29 +427,34 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     std::ofstream f(dir / "frames.csv");
     f << "frame,step,total_ms,recompose_ms,render_ms,texels,draws,pending_changes,oldest_pending_"
          "frames,"
-         "completed_changes,max_latency_frames,rebuild_active,presented,flicker_updates\n";
+         "completed_changes,max_latency_frames,rebuild_active,presented,flicker_updates,probe_"
+         "entries,probe_sets_changed\n";
     for (const FrameRecord& r : frames) {
       char row[320];
-      std::snprintf(row, sizeof row,
-                    "%" PRIu64 ",%s,%.3f,%.3f,%.3f,%" PRIu64 ",%u,%u,%u,%u,%u,%d,%d,%u\n", r.frame,
-                    r.step.c_str(), r.total_ms, r.recompose_ms, r.render_ms, r.texels, r.draws,
-                    r.pending, r.oldest_pending_frames, r.completed, r.max_latency,
-                    r.rebuild_active ? 1 : 0, r.presented ? 1 : 0, r.flicker_updates);
+      std::snprintf(
+          row, sizeof row,
+          "%" PRIu64 ",%s,%.3f,%.3f,%.3f,%" PRIu64 ",%u,%u,%u,%u,%u,%d,%d,%u,%" PRIu64 ",%u\n",
+          r.frame, r.step.c_str(), r.total_ms, r.recompose_ms, r.render_ms, r.texels, r.draws,
+          r.pending, r.oldest_pending_frames, r.completed, r.max_latency, r.rebuild_active ? 1 : 0,
+          r.presented ? 1 : 0, r.flicker_updates, r.probe_entries, r.probe_sets);
       f << row;
     }
   }
   int failures = gl_failed ? 1 : 0;
   {
     std::ofstream f(dir / "steps.csv");
-    f << "step,action,node,applied_frame,landed_frame,latency_frames,bound_frames,landed,probe_"
-         "before,probe_after,"
-         "screenshot,error\n";
+    f << "step,action,node,applied_frame,landed_frame,latency_frames,bound_frames,landed,meter_"
+         "before,meter_after,item,item_facing_before,item_facing_after,item_mean_before,item_mean_"
+         "after,screenshot,error\n";
     for (const StepRecord& r : records) {
-      char row[512];
-      std::snprintf(row, sizeof row, "%s,%s,%s,%" PRIu64 ",%" PRIu64 ",%u,%u,%d,%.6g,%.6g,%s,%s\n",
+      char row[640];
+      std::snprintf(row, sizeof row,
+                    "%s,%s,%s,%" PRIu64 ",%" PRIu64
+                    ",%u,%u,%d,%.6g,%.6g,%s,%.7g,%.7g,%.7g,%.7g,%s,%s\n",
                     r.name.c_str(), r.action.c_str(), r.node.c_str(), r.applied_frame,
-                    r.landed_frame, r.latency, r.bound, r.landed ? 1 : 0, r.probe_before,
-                    r.probe_after, r.screenshot.c_str(), r.error.c_str());
+                    r.landed_frame, r.latency, r.bound, r.landed ? 1 : 0, r.meter_before,
+                    r.meter_after, r.item.c_str(), r.item_before.facing, r.item_after.facing,
+                    r.item_before.mean, r.item_after.mean, r.screenshot.c_str(), r.error.c_str());
       f << row;
       if (!r.error.empty()) {
         std::fprintf(stderr, "lightpatch-inn: step %s: %s\n", r.name.c_str(), r.error.c_str());
@@ -403,8 +463,12 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     }
   }
   std::vector<double> idle_total, busy_total, busy_recompose, flicker_recompose, render;
-  uint64_t busy_texels = 0;
+  uint64_t busy_texels = 0, probe_entries = 0, probe_entries_max = 0;
+  uint32_t probe_sets_max = 0;
   for (const FrameRecord& r : frames) {
+    probe_entries += r.probe_entries;
+    probe_entries_max = std::max(probe_entries_max, r.probe_entries);
+    probe_sets_max = std::max(probe_sets_max, r.probe_sets);
     (r.texels ? busy_total : idle_total).push_back(r.total_ms);
     if (r.texels) {
       busy_recompose.push_back(r.recompose_ms);
@@ -443,6 +507,16 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           ? 0.0
           : static_cast<double>(busy_texels) / static_cast<double>(busy_recompose.size());
   summary["render_ms_mean"] = mean(render);
+  const double probe_entries_mean =
+      frames.empty() ? 0.0
+                     : static_cast<double>(probe_entries) / static_cast<double>(frames.size());
+  summary["light_probes"] = {{"probes", s.probes.probe_count()},
+                             {"memory_bytes", s.probes.memory_bytes()},
+                             {"entries_per_frame_mean", probe_entries_mean},
+                             {"entries_per_frame_max", probe_entries_max},
+                             {"sets_changed_per_frame_max", probe_sets_max},
+                             {"rebuild_entries", s.probes.stats().rebuild_entries},
+                             {"max_entries_per_probe", s.probes.stats().max_entries_per_probe}};
   summary["drift"] = {{"planner_relative_error_bound", error_bound},
                       {"max_abs_difference_vs_rebuild", drift_max},
                       {"max_relative_difference", drift_relative},
@@ -459,11 +533,19 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   summary["steps"] = js;
   std::ofstream(dir / "summary.json") << summary.dump(1) << "\n";
 
-  std::printf("%-34s %8s %6s %12s %12s\n", "step", "latency", "bound", "probe before",
-              "probe after");
+  // "meter": the light map around the step's light; "item": the carried item's probe irradiance
+  // facing the nearest light and averaged over directions (luminance; - when nothing is carried).
+  std::printf("%-34s %8s %6s %10s %10s %21s %21s\n", "step", "latency", "bound", "meter before",
+              "after", "item facing bef/aft", "item mean bef/aft");
   for (const StepRecord& r : records) {
-    std::printf("%-34s %8u %6u %12.4g %12.4g%s%s\n", r.name.c_str(), r.latency, r.bound,
-                r.probe_before, r.probe_after,
+    char item[64] = "-", item_mean[64] = "-";
+    if (r.item_before.facing >= 0.0f) {
+      std::snprintf(item, sizeof item, "%.4g / %.4g", r.item_before.facing, r.item_after.facing);
+      std::snprintf(item_mean, sizeof item_mean, "%.4g / %.4g", r.item_before.mean,
+                    r.item_after.mean);
+    }
+    std::printf("%-34s %8u %6u %10.4g %10.4g %21s %21s%s%s\n", r.name.c_str(), r.latency, r.bound,
+                r.meter_before, r.meter_after, item, item_mean,
                 r.error.empty() ? "" : "  FAILED: ", r.error.c_str());
   }
   std::printf("light map %ux%u, budget %" PRIu64
@@ -471,6 +553,11 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
               "%.2f ms with (recomposition %.2f ms, %.0f texels)\n",
               rt.width(), rt.height(), s.budget, frames.size(), mean(idle_total), mean(busy_total),
               mean(busy_recompose), summary["texels_mean_when_recomposing"].get<double>());
+  std::printf("light probes: %u probes, %" PRIu64
+              " bytes; update %.1f entries a frame on average, "
+              "at most %" PRIu64 " (%u sets changed); a full rebuild %" PRIu64 " entries\n",
+              s.probes.probe_count(), s.probes.memory_bytes(), probe_entries_mean,
+              probe_entries_max, probe_sets_max, s.probes.stats().rebuild_entries);
   std::printf(
       "drift after the flicker benchmark: max |incremental - rebuilt| = %.4g (relative %.3g; map "
       "max %.4g, "

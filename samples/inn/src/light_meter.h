@@ -1,4 +1,4 @@
-// LightProbe: measures what the light map holds on the surfaces around a light (the table under a
+// LightMeter: measures what the light map holds on the surfaces around a light (the table under a
 // candle, the wall and floor around a torch), so a scripted run can show that lighting a light
 // brightens the spot in front of it. Texels are found once per light by casting rays from the
 // light down and around onto the static geometry; measuring reads those texels back from the
@@ -17,12 +17,12 @@ namespace lightpatch::inn {
 
 struct World;
 
-class LightProbe {
+class LightMeter {
  public:
-  LightProbe() = default;
-  ~LightProbe();
-  LightProbe(const LightProbe&) = delete;
-  LightProbe& operator=(const LightProbe&) = delete;
+  LightMeter() = default;
+  ~LightMeter();
+  LightMeter(const LightMeter&) = delete;
+  LightMeter& operator=(const LightMeter&) = delete;
 
   // Creates the read-back framebuffer (current context).
   void init();
@@ -36,6 +36,9 @@ class LightProbe {
   // Mean luminance (irradiance units) of `texels` in the runtime's light map; -1 if empty or
   // the map cannot be read.
   float measure(const Runtime& runtime, const std::vector<glm::ivec2>& texels);
+
+  // Rec. 709 luminance of linear RGB.
+  static float luminance(const float rgb[3]);
 
  private:
   uint32_t framebuffer_ = 0;

@@ -1,4 +1,4 @@
-#include "light_probe.h"
+#include "light_meter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,23 +9,19 @@
 #include "world.h"
 
 namespace lightpatch::inn {
-namespace {
-
-float luminance(const float rgb[3]) {
+float LightMeter::luminance(const float rgb[3]) {
   return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
 }
 
-}  // namespace
-
-LightProbe::~LightProbe() {
+LightMeter::~LightMeter() {
   if (framebuffer_) glDeleteFramebuffers(1, &framebuffer_);
 }
 
-void LightProbe::init() {
+void LightMeter::init() {
   glGenFramebuffers(1, &framebuffer_);
 }
 
-std::vector<glm::ivec2> LightProbe::texels_around(const World& world, glm::vec3 origin,
+std::vector<glm::ivec2> LightMeter::texels_around(const World& world, glm::vec3 origin,
                                                   uint32_t map_width, uint32_t map_height,
                                                   float min_distance, float max_distance) {
   std::vector<glm::ivec2> texels;
@@ -53,7 +49,7 @@ std::vector<glm::ivec2> LightProbe::texels_around(const World& world, glm::vec3 
   return texels;
 }
 
-float LightProbe::measure(const Runtime& runtime, const std::vector<glm::ivec2>& texels) {
+float LightMeter::measure(const Runtime& runtime, const std::vector<glm::ivec2>& texels) {
   if (texels.empty() || !runtime.ready()) return -1.0f;
   double sum = 0.0;
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
