@@ -50,10 +50,10 @@ struct Cooked {
   std::vector<uint8_t> pack;
 };
 
-void cook(Cooked& c, Scene scene) {
+void cook(Cooked& c, Scene scene, float spacing = 0.5f) {
   c.bake.quality = Quality::kDraft;
   c.bake.gather_rays = 32;
-  c.bake.probes.spacing = 0.5f;
+  c.bake.probes.spacing = spacing;
   c.bake.probes.rays = 256;
   LayoutOptions lo;
   lo.lightmap_size = 128;
@@ -351,6 +351,53 @@ TEST(Probes, RuntimeProbesFollowTheStateThroughThePack) {
   warm_spec.lights["lamp"].has_color = true;
   std::copy(warm, warm + 3, warm_spec.lights["lamp"].color);
   expect_state(warm_spec, "warm_lamp_no_crate");
+}
+
+// Sampling between probes never blends through the partition: at 0.35 m spacing a grid cell
+// straddles it with probes on both sides, and a point just east of it must take nothing from the
+// lit west probes (the east room is unlit: its SH is exactly zero), while a point just west of it
+// is lit.
+TEST(Probes, SamplingDoesNotBlendThroughAWall) {
+  Cooked c;
+  cook(c, two_sealed_rooms(), 0.35f);
+  ASSERT_TRUE(c.probes.has_grid);
+  // The cell around x = 0 has probes on both sides of the 0.2 m partition.
+  const glm::vec3 o = c.probes.grid_origin;
+  const float h = c.probes.grid_spacing;
+  const int i = int(std::floor((0.0f - o.x) / h));
+  ASSERT_LT(o.x + h * float(i), -0.1f);
+  ASSERT_GT(o.x + h * float(i + 1), 0.1f);
+  PackView view;
+  Error error;
+  ASSERT_EQ(PackView::open(c.pack.data(), c.pack.size(), &view, &error), Status::kOk)
+      << error.message;
+  LightProbes probes;
+  SceneState state;
+  ASSERT_EQ(probes.init(view, &error), Status::kOk) << error.message;
+  ASSERT_EQ(state.init(view, &error), Status::kOk) << error.message;
+  ASSERT_EQ(probes.update(state), Status::kOk);
+  size_t east = 0, west = 0;
+  for (float x : {0.12f, 0.2f, 0.3f})
+    for (float y : {0.4f, 1.3f, 2.2f})
+      for (float z : {-1.5f, -0.2f, 0.9f}) {
+        float sh[27];
+        const float east_point[3] = {x, y, z}, west_point[3] = {-x, y, z};
+        ASSERT_TRUE(probes.sample(east_point, sh));
+        float sum = 0.0f;
+        for (float v : sh) sum += std::abs(v);
+        EXPECT_EQ(sum, 0.0f) << "east point " << x << " " << y << " " << z << " takes light";
+        east += sum == 0.0f ? 1 : 0;
+        ASSERT_TRUE(probes.sample(west_point, sh));
+        float rgb[3];
+        const float up[3] = {0, 1, 0}, toward_wall[3] = {1, 0, 0};
+        LightProbes::irradiance(sh, up, rgb);
+        float e = rgb[0];
+        LightProbes::irradiance(sh, toward_wall, rgb);
+        e += rgb[0];
+        west += e > 0.0f ? 1 : 0;
+      }
+  EXPECT_EQ(east, 27u);
+  EXPECT_EQ(west, 27u);
 }
 
 }  // namespace
