@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <random>
 
+#include "indirect/gather.h"
+#include "indirect/solve.h"
 #include "indirect_test_scenes.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/tracer.h"
@@ -320,6 +322,53 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
   ASSERT_EQ(a.shadows.size(), b.shadows.size());
   for (size_t k = 0; k < a.shadows.size(); ++k)
     EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
+}
+
+}  // namespace
+}  // namespace lightpatch::cooker
+
+namespace lightpatch::cooker {
+namespace {
+
+// The denoiser's near-field guide (solve.h): where a floor meets a wall, bounce light falls from
+// the open floor's level to a fraction of it within a few texels (ambient occlusion). Weights from
+// the near field keep the two apart, which the plane and normal weights of a flat floor cannot;
+// the filter stays linear.
+TEST(Denoise, NearFieldKeepsAContactGradientAndStaysLinear) {
+  const TexelSet texels = test::grid_texels(32, 32, glm::vec3(0.0f), glm::vec3(1, 0, 0),
+                                            glm::vec3(0, 0, 1), glm::vec3(0, 1, 0));
+  const CoarseGrid grid = build_coarse_grid(texels, 2, nullptr, 1);
+  ASSERT_GT(grid.size(), 16u);
+  // Coarse texels with x < 0.25 are "at the wall's foot": dim, their near field high.
+  CoarseMap map(grid.size()), other(grid.size());
+  std::vector<float> near(grid.size());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (size_t c = 0; c < grid.size(); ++c) {
+    const bool foot = grid.position[c].x < 0.25f;
+    map[c] = glm::vec3(foot ? 0.1f : 1.0f);
+    other[c] = glm::vec3(u(rng), u(rng), u(rng));
+    near[c] = foot ? 0.4f : 0.0f;
+  }
+  CoarseMap guided = map, plain = map;
+  denoise(grid, 2, guided, &near, near_field_sigma(256));
+  denoise(grid, 2, plain);
+  float worst_guided = 0.0f, worst_plain = 0.0f;
+  for (size_t c = 0; c < grid.size(); ++c) {
+    if (grid.position[c].x >= 0.25f) continue;
+    worst_guided = std::max(worst_guided, guided[c].x);
+    worst_plain = std::max(worst_plain, plain[c].x);
+  }
+  EXPECT_LT(worst_guided, 0.11f) << "the guide lets the open floor's light into the contact";
+  EXPECT_GT(worst_plain, 0.3f) << "without the guide the test shows nothing";
+  // Linear: the filter of a sum is the sum of the filters.
+  CoarseMap sum(grid.size()), a = map, b = other;
+  for (size_t c = 0; c < grid.size(); ++c) sum[c] = map[c] + other[c];
+  denoise(grid, 2, sum, &near, 0.0625f);
+  denoise(grid, 2, a, &near, 0.0625f);
+  denoise(grid, 2, b, &near, 0.0625f);
+  for (size_t c = 0; c < grid.size(); ++c)
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(sum[c][ch], a[c][ch] + b[c][ch], 1e-5f);
 }
 
 }  // namespace

@@ -40,6 +40,7 @@ class GatherIntegrator final : public IndirectIntegrator {
     const double load_s = progress.end();
     if (loaded) {
       report.stage_time("bake.gather_load", load_s);
+      near_ = near_field(op_);
       return;
     }
     progress.begin("gather rays", 1);
@@ -50,6 +51,7 @@ class GatherIntegrator final : public IndirectIntegrator {
     op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
     report.stage_time("bake.gather_rays", progress.end());
     if (store) store->save(op_, progress);
+    near_ = near_field(op_);
   }
 
   GroupBounce prepare(const FloatImage& direct, float threshold) const override {
@@ -83,7 +85,7 @@ class GatherIntegrator final : public IndirectIntegrator {
   }
 
   void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const override {
-    denoise(op_.grid, preset_.denoise, map);
+    denoise(op_.grid, preset_.denoise, map, &near_, near_field_sigma(op_.rays));
     add_magnified(op_.grid, b_.texels, map, fine);
     const int s = b_.layout.align;
     if (s > 1 && blocks) *blocks = block_image(op_.grid, b_.texels, s, map);
@@ -142,6 +144,7 @@ class GatherIntegrator final : public IndirectIntegrator {
   const BakeContext& b_;
   GatherPreset preset_;
   GatherOperator op_;
+  std::vector<float> near_;  // near_field(op_): the denoiser's guide
   mutable Tally groups_, changes_, states_;
 };
 

@@ -246,22 +246,51 @@ float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& pr
   return best;
 }
 
-void denoise(const CoarseGrid& grid, int levels, CoarseMap& map) {
-  levels = std::min(levels, CoarseGrid::kLinkSteps);
-  if (levels <= 0 || map.empty()) return;
+namespace {
+
+// World distance between neighbouring coarse texels (median over the grid): the scale of the
+// denoiser's plane-distance weight and of the near field.
+float coarse_spacing(const CoarseGrid& grid) {
   const size_t nc = grid.size();
-  // World distance between neighbouring coarse texels (median over the map): the scale of the
-  // plane-distance weight.
   std::vector<float> gaps;
   for (uint32_t c = 0; c < nc; c += std::max<uint32_t>(1, uint32_t(nc / 4096))) {
     const uint32_t r = grid.link(c, 0, 1, 0);
     if (r != kNoTexel) gaps.push_back(glm::length(grid.position[r] - grid.position[c]));
   }
-  float spacing = 1.0f;
-  if (!gaps.empty()) {
-    std::nth_element(gaps.begin(), gaps.begin() + long(gaps.size() / 2), gaps.end());
-    spacing = std::max(gaps[gaps.size() / 2], 1e-12f);
+  if (gaps.empty()) return 1.0f;
+  std::nth_element(gaps.begin(), gaps.begin() + long(gaps.size() / 2), gaps.end());
+  return std::max(gaps[gaps.size() / 2], 1e-12f);
+}
+
+}  // namespace
+
+std::vector<float> near_field(const GatherOperator& op) {
+  const CoarseGrid& grid = op.grid;
+  const float reach = kNearFieldSpacings * coarse_spacing(grid);
+  std::vector<float> out(grid.size(), 0.0f);
+  if (op.rays <= 0) return out;
+  for (size_t c = 0; c < grid.size(); ++c) {
+    float sum = 0.0f;
+    for (size_t r = c * size_t(op.rays); r < (c + 1) * size_t(op.rays); ++r) {
+      const uint32_t h = op.hit[r];
+      if (h >= grid.size()) continue;  // a miss or the back of a surface: far
+      sum += std::exp(-glm::length(grid.position[h] - grid.position[c]) / reach);
+    }
+    out[c] = sum / float(op.rays);
   }
+  return out;
+}
+
+float near_field_sigma(int rays) {
+  return std::max(kNearFieldSigma, 1.0f / std::sqrt(float(std::max(rays, 1))));
+}
+
+void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vector<float>* near,
+             float near_sigma) {
+  levels = std::min(levels, CoarseGrid::kLinkSteps);
+  if (levels <= 0 || map.empty()) return;
+  const size_t nc = grid.size();
+  const float spacing = coarse_spacing(grid);
   constexpr float kKernel[3] = {0.25f, 0.5f, 0.25f};
   CoarseMap out(nc);
   for (int level = 0; level < levels; ++level) {
@@ -276,7 +305,11 @@ void denoise(const CoarseGrid& grid, int levels, CoarseMap& map) {
           const float nd = std::max(0.0f, glm::dot(grid.normal[c], grid.normal[q]));
           const float n2 = nd * nd, n4 = n2 * n2;
           const float plane = glm::dot(grid.normal[c], grid.position[q] - grid.position[c]) / sigma;
-          const float w = kKernel[dx + 1] * kKernel[dy + 1] * n4 * n4 * std::exp(-plane * plane);
+          float w = kKernel[dx + 1] * kKernel[dy + 1] * n4 * n4 * std::exp(-plane * plane);
+          if (near) {
+            const float dn = ((*near)[c] - (*near)[q]) / near_sigma;
+            w *= std::exp(-dn * dn);
+          }
           sum += w * map[q];
           wsum += w;
         }

@@ -89,10 +89,25 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
                         const EmptyRadiance& empty);
 
+// How much nearby geometry fills each coarse texel's hemisphere: the mean over its gather rays of
+// exp(-d / (kNearFieldSpacings * the coarse texels' spacing)), d the distance to what the ray hits
+// (0 for a miss or a back face). High where a surface meets another (a floor at a wall's foot,
+// under a shelf), where bounce light falls off within a few texels (ambient occlusion): the
+// denoiser keeps such texels apart from open ones. From geometry only.
+constexpr float kNearFieldSpacings = 4.0f;
+// The denoiser's near-field scale: at least twice the worst-case standard error of a mean of N
+// values in [0, 1] (0.5 / sqrt(N)), so that the guide's own noise does not stop the filter on open
+// surfaces at low ray counts.
+constexpr float kNearFieldSigma = 0.05f;
+float near_field_sigma(int rays);
+std::vector<float> near_field(const GatherOperator& op);
+
 // Edge-avoiding a-trous filter over `levels` passes (steps 1, 2, 4, ... blocks), weights from the
-// coarse texels' charts, normals and planes only (never from values): linear, so it commutes
-// with the decomposition. 0 levels: no filtering.
-void denoise(const CoarseGrid& grid, int levels, CoarseMap& map);
+// coarse texels' charts, normals, planes and near field (`near`, near_field(); null: not used)
+// only, never from values: linear, so it commutes with the decomposition. 0 levels: no
+// filtering.
+void denoise(const CoarseGrid& grid, int levels, CoarseMap& map,
+             const std::vector<float>* near = nullptr, float near_sigma = kNearFieldSigma);
 
 // Adds the coarse map, magnified bilinearly within each chart, to `fine` (3 channels), scaled.
 void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
