@@ -13,7 +13,9 @@
 #include <set>
 #include <vector>
 
+#include "lightpatch/planner.h"
 #include "lightpatch/scene_state.h"
+#include "runtime/map_reference.h"
 #include "runtime/synthetic_pack.h"
 #include "support/counters.h"
 
@@ -139,6 +141,65 @@ TEST(LightProbes, IncrementalUpdatesEqualRebuildsAndTheReferenceSum) {
     EXPECT_EQ(per_probe, v.probe_entry_count());
     EXPECT_EQ(incremental.stats().max_entries_per_probe, most);
   }
+}
+
+// A game with a Runtime updates the probes from its planner: they follow the presented state
+// (what the light map shows), not the wanted one, so a lit thing changes in the frame its room
+// does, however many frames the change takes.
+TEST(LightProbes, FollowThePlannersPresentedStateNotTheWanted) {
+  const SyntheticPack bytes = make_synthetic_pack(probe_options(5));
+  PackView v;
+  Error error;
+  ASSERT_TRUE(bytes.open(&v, &error)) << error.message;
+  Planner planner;
+  ASSERT_EQ(planner.init(v, PlannerLimits(), &error), Status::kOk) << error.message;
+  testing::CpuMapSink sink(v, testing::Rounding::kNone);
+  LightProbes probes;
+  SceneState shown;
+  ASSERT_EQ(probes.init(v, &error), Status::kOk) << error.message;
+  ASSERT_EQ(shown.init(v, &error), Status::kOk) << error.message;
+  ASSERT_EQ(probes.update(planner), Status::kOk);  // nothing presented yet: nothing applied
+  EXPECT_EQ(probes.stats().entries_last_update, 0u);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<double> value, magnitude;
+  int lagging = 0, checked = 0;
+  for (int frame = 0; frame < 300; ++frame) {
+    if (rng() % 3 == 0) {
+      if (rng() % 3 == 0) {
+        const uint32_t o = rng() % v.object_count();
+        ASSERT_EQ(planner.set_object_visible(o, !planner.object_visible(o)), Status::kOk);
+      } else {
+        const float c[3] = {u(rng), u(rng), u(rng)};
+        ASSERT_EQ(planner.set_light(rng() % v.light_count(), u(rng) < 0.7f, c, 4.0f * u(rng)),
+                  Status::kOk);
+      }
+    }
+    planner.update(200, sink);
+    ASSERT_EQ(probes.update(planner), Status::kOk);
+    if (!planner.map_ready()) continue;
+    // The presented state as a SceneState: each light at its shown factor.
+    for (uint32_t l = 0; l < v.light_count(); ++l) {
+      LightState ls{true, {0, 0, 0}, 1.0f};
+      planner.shown_factor(l, ls.color);
+      ASSERT_EQ(shown.set_light(l, ls), Status::kOk);
+    }
+    for (uint32_t o = 0; o < v.object_count(); ++o)
+      ASSERT_EQ(shown.set_object_visible(o, planner.shown_visible(o)), Status::kOk);
+    reference(v, shown, &value, &magnitude);
+    for (uint32_t p = 0; p < v.probe_count(); ++p) {
+      float sh[kProbeShFloats];
+      probes.probe_sh(p, sh);
+      for (uint32_t i = 0; i < kProbeShFloats; ++i) {
+        const size_t k = size_t(p) * kProbeShFloats + i;
+        ASSERT_NEAR(sh[i], value[k], 1e-5 * magnitude[k] + 1e-7) << "frame " << frame;
+      }
+    }
+    ++checked;
+    lagging += planner.stats().pending_changes > 0 ? 1 : 0;
+  }
+  EXPECT_GT(checked, 200);
+  EXPECT_GT(lagging, 20) << "no change took more than a frame: the test shows nothing";
 }
 
 // The probes whose SH differs bit for bit between two snapshots.

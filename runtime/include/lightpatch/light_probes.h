@@ -11,7 +11,8 @@
 //
 // Probes are evaluated on the CPU whatever path the GLES Runtime takes; the game samples the SH
 // where a moving thing is (sample()) and uploads it as uniforms (27 floats, or the 3 x 9 of its
-// shader), typically once a frame per lit object: probes.update(runtime.state()) then sample().
+// shader), typically once a frame per lit object: probes.update(runtime.planner()) after
+// runtime.update(), then sample().
 //
 // Memory: init() allocates everything (216 bytes a probe, 12 bytes a set, 4 bytes a probe for its
 // cost); update(), rebuild(), probe_sh(), sample() and find_probe() allocate nothing. No
@@ -22,6 +23,7 @@
 
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
+#include "lightpatch/planner.h"
 #include "lightpatch/scene_state.h"
 #include "lightpatch/status.h"
 
@@ -55,6 +57,13 @@ class LightProbes {
   // The same from zero: every active set added again (drops any rounding that updates piled up;
   // in double precision that stays below 1e-12 relative over millions of changes).
   Status rebuild(const SceneState& state);
+  // Brings every probe to the state `planner` has presented (Planner::shown_factor,
+  // shown_visible: what the light map the game samples holds), so that a thing lit by the probes
+  // changes in the same frame as the light map around it, not the frames of a change's latency
+  // ahead of it. A game with a Runtime calls update(runtime.planner()) after runtime.update().
+  // kInvalidArgument for a planner of another pack; before the planner's map_ready() nothing is
+  // presented and the probes stay as they are (zero after init()).
+  Status update(const Planner& planner);
 
   uint32_t probe_count() const { return pack_.probe_count(); }
   // Probe i's irradiance SH, out[k * 3 + c] (spherical_harmonics.h's basis and order; units of
@@ -85,8 +94,9 @@ class LightProbes {
   uint64_t memory_bytes() const { return memory_; }
 
  private:
-  Status apply(const SceneState& state, bool from_zero);
-  void set_factor(const SceneState& state, uint32_t set, float out[3]) const;
+  // Factor(l, rgb) gives light l's factor, Visible(o) object o's visibility.
+  template <typename Factor, typename Visible>
+  Status apply(Factor&& factor, Visible&& visible, bool from_zero);
 
   PackView pack_;
   double* accumulator_ = nullptr;  // [probe * 27 + k * 3 + c]

@@ -149,6 +149,8 @@ class Planner {
   // Starts a rebuild now (a no-op while one is running).
   void request_rebuild();
 
+  uint32_t light_count() const { return light_count_; }
+  uint32_t object_count() const { return object_count_; }
   // The presented state: what the light map holds (valid once map_ready()).
   void shown_factor(uint32_t light, float out[3]) const;
   bool shown_visible(uint32_t object) const { return shown_visible_[object] != 0; }

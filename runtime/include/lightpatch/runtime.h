@@ -52,8 +52,9 @@
 // size. Depth, stencil, scissor and face culling are disabled while drawing and left disabled.
 //
 // Light probes (light_probes.h) are evaluated on the CPU on every path: the game keeps a
-// LightProbes, calls probes.update(runtime.state()) each frame, samples the SH where its moving
-// things are and uploads it as uniforms; the runtime draws no probe.
+// LightProbes, calls probes.update(runtime.planner()) each frame after update() (the state the
+// light map shows), samples the SH where its moving things are and uploads it as uniforms; the
+// runtime draws no probe.
 //
 // GL errors are checked (glGetError, which can stall a driver) only in builds with
 // LIGHTPATCH_GL_CHECKS (CMake option; on in Debug builds); elsewhere update() does not look.

@@ -54,32 +54,8 @@ Status LightProbes::init(const PackView& pack, Error* error) {
 }
 
 // The set's factor in `state` with its sign: group_rules.h's, as the light map applies its groups.
-void LightProbes::set_factor(const SceneState& state, uint32_t set, float out[3]) const {
-  const ProbeSetRecord& s = pack_.probe_set(set);
-  const bool active = group_active(
-      s,
-      [&](uint32_t l) {
-        float f[3];
-        state.light_factor(l, f);
-        return f[0] != 0.0f || f[1] != 0.0f || f[2] != 0.0f;
-      },
-      [&](uint32_t o) { return state.object_visible(o); });
-  const float sign = group_sign(s.kind);
-  if (!active) {
-    out[0] = out[1] = out[2] = 0.0f;
-  } else if (group_has_light(s.kind)) {
-    state.light_factor(s.light, out);
-    for (int c = 0; c < 3; ++c) out[c] *= sign;
-  } else {
-    out[0] = out[1] = out[2] = sign;
-  }
-}
-
-Status LightProbes::apply(const SceneState& state, bool from_zero) {
-  if (!pack_.valid() || state.light_count() != pack_.light_count() ||
-      state.object_count() != pack_.object_count()) {
-    return Status::kInvalidArgument;
-  }
+template <typename Factor, typename Visible>
+Status LightProbes::apply(Factor&& factor, Visible&& visible, bool from_zero) {
   if (from_zero) {
     std::memset(accumulator_, 0, sizeof(double) * kProbeShFloats * pack_.probe_count());
     std::memset(applied_, 0, sizeof(float) * 3 * pack_.probe_set_count());
@@ -87,12 +63,27 @@ Status LightProbes::apply(const SceneState& state, bool from_zero) {
   uint64_t entries = 0;
   uint32_t changed = 0;
   for (uint32_t s = 0; s < pack_.probe_set_count(); ++s) {
-    float f[3];
-    set_factor(state, s, f);
+    const ProbeSetRecord& r = pack_.probe_set(s);
+    // The set's factor, its sign included: group_rules.h, as for the map's groups.
+    const bool active = group_active(
+        r,
+        [&](uint32_t l) {
+          float f[3];
+          factor(l, f);
+          return f[0] != 0.0f || f[1] != 0.0f || f[2] != 0.0f;
+        },
+        visible);
+    const float sign = group_sign(r.kind);
+    float f[3] = {0.0f, 0.0f, 0.0f};
+    if (active && group_has_light(r.kind)) {
+      factor(r.light, f);
+      for (int c = 0; c < 3; ++c) f[c] *= sign;
+    } else if (active) {
+      f[0] = f[1] = f[2] = sign;
+    }
     float* old = applied_ + size_t(s) * 3;
     if (f[0] == old[0] && f[1] == old[1] && f[2] == old[2]) continue;
     const double d[3] = {double(f[0]) - old[0], double(f[1]) - old[1], double(f[2]) - old[2]};
-    const ProbeSetRecord& r = pack_.probe_set(s);
     for (uint32_t e = r.first_entry; e < r.first_entry + r.entry_count; ++e) {
       const ProbeEntry& pe = pack_.probe_entry(e);
       double* acc = accumulator_ + size_t(pe.probe) * kProbeShFloats;
@@ -112,12 +103,35 @@ Status LightProbes::apply(const SceneState& state, bool from_zero) {
   return Status::kOk;
 }
 
+namespace {
+
+bool same_pack(const PackView& pack, const SceneState& state) {
+  return pack.valid() && state.light_count() == pack.light_count() &&
+         state.object_count() == pack.object_count();
+}
+
+}  // namespace
+
 Status LightProbes::update(const SceneState& state) {
-  return apply(state, false);
+  if (!same_pack(pack_, state)) return Status::kInvalidArgument;
+  return apply([&](uint32_t l, float out[3]) { state.light_factor(l, out); },
+               [&](uint32_t o) { return state.object_visible(o); }, false);
 }
 
 Status LightProbes::rebuild(const SceneState& state) {
-  return apply(state, true);
+  if (!same_pack(pack_, state)) return Status::kInvalidArgument;
+  return apply([&](uint32_t l, float out[3]) { state.light_factor(l, out); },
+               [&](uint32_t o) { return state.object_visible(o); }, true);
+}
+
+Status LightProbes::update(const Planner& planner) {
+  if (!pack_.valid() || planner.light_count() != pack_.light_count() ||
+      planner.object_count() != pack_.object_count()) {
+    return Status::kInvalidArgument;
+  }
+  if (!planner.map_ready()) return Status::kOk;  // nothing presented: the probes stay
+  return apply([&](uint32_t l, float out[3]) { planner.shown_factor(l, out); },
+               [&](uint32_t o) { return planner.shown_visible(o); }, false);
 }
 
 void LightProbes::probe_sh(uint32_t i, float out[kProbeShFloats]) const {

@@ -128,9 +128,9 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
       std::fprintf(stderr, "lightpatch-inn: runtime update failed: %s\n", status_name(status));
       return 1;
     }
-    // After the game's changes of this frame (a few thousand comparisons and the changed sets'
-    // entries; no GL work).
-    if (s.probes.update(rt.state()) != Status::kOk) {
+    // To the state the light map now shows, so the held item changes with the room around it (a
+    // few thousand comparisons and the changed sets' entries; no GL work).
+    if (s.probes.update(rt.planner()) != Status::kOk) {
       std::fprintf(stderr, "lightpatch-inn: light probe update failed\n");
       return 1;
     }

@@ -52,8 +52,9 @@ struct PlaySession {
   platform::FileMapping mapping;
   PackView pack;
   Runtime runtime;
-  // The pack's light probes, for the carried item (HeldItem); each frame, after the game changed
-  // the runtime's wanted state: probes.update(runtime.state()). Empty for a pack without probes.
+  // The pack's light probes, for the carried item (HeldItem); each frame, after runtime.update():
+  // probes.update(runtime.planner()), the state the light map shows. Empty for a pack without
+  // probes.
   LightProbes probes;
   World world;
   std::unique_ptr<CollisionGrid> grid;

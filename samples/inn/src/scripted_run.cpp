@@ -175,7 +175,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     Status status = rt.update(s.budget);
     glFinish();
     const uint64_t r1 = platform::monotonic_ns();
-    if (status == Status::kOk) status = s.probes.update(rt.state());
+    if (status == Status::kOk) status = s.probes.update(rt.planner());
     r.probe_entries = s.probes.stats().entries_last_update;
     r.probe_sets = s.probes.stats().sets_changed_last_update;
     const HeldItem held = hold_item(game, s.world, s.probes, view);
