@@ -40,17 +40,16 @@ class GatherIntegrator final : public IndirectIntegrator {
     const double load_s = progress.end();
     if (loaded) {
       report.stage_time("bake.gather_load", load_s);
-      near_ = near_field(op_);
-      return;
+    } else {
+      progress.begin("gather rays", 1);
+      GatherOptions go;
+      go.rays = preset_.rays;
+      go.seed = b.options.seed;
+      go.threads = b.threads;
+      op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
+      report.stage_time("bake.gather_rays", progress.end());
+      if (store) store->save(op_, progress);
     }
-    progress.begin("gather rays", 1);
-    GatherOptions go;
-    go.rays = preset_.rays;
-    go.seed = b.options.seed;
-    go.threads = b.threads;
-    op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
-    report.stage_time("bake.gather_rays", progress.end());
-    if (store) store->save(op_, progress);
     near_ = near_field(op_);
   }
 

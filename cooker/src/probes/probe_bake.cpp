@@ -79,7 +79,19 @@ class ProbeLighter {
         seed_(seed),
         surfaces_(texel_surfaces(texels)),
         eps_(tracer.epsilon()),
-        extent_(2.0f * scene.scale()) {}
+        extent_(2.0f * scene.scale()) {
+    if (rays <= 0) throw CookError("light probes need at least one gather ray");
+  }
+
+  // A ray's share of the sphere: radiance sums times this are its SH projection.
+  float ray_weight() const { return 4.0f * kPi / float(rays_); }
+
+  // What probe `probe` at `p` sees: its gather rays and every light's direct samples.
+  void observe(size_t probe, const glm::vec3& p, std::vector<ProbeRay>& rays,
+               std::vector<DirectSample>& direct) const {
+    trace(probe, p, rays);
+    this->direct(p, direct);
+  }
 
   void trace(size_t probe, const glm::vec3& p, std::vector<ProbeRay>& out) const {
     const float turn = 2.0f * kPi * hash_to_unit(sample_hash(seed_, probe, 0x70726F62u, 0));
@@ -192,10 +204,8 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
                  const TexelSet& texels, const Tracer& tracer, const BakedMaps& maps,
                  const ProbeOptions& options, Progress& progress, Report& report) {
   if (probes.empty()) return;
-  const int rays = options.rays;
-  if (rays <= 0) throw CookError("light probes need at least one gather ray");
-  const ProbeLighter lighter(scene, layout, texels, tracer, rays, options.seed);
-  const float ray_weight = 4.0f * kPi / float(rays);
+  const ProbeLighter lighter(scene, layout, texels, tracer, options.rays, options.seed);
+  const float ray_weight = lighter.ray_weight();
   const size_t objects = scene.objects.size();
   std::vector<int> pack_light(scene.lights.size(), -1);
   for (size_t i = 0; i < maps.lights.size(); ++i) pack_light[size_t(maps.lights[i])] = int(i);
@@ -213,8 +223,7 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
     const glm::vec3 p = probes.probes[size_t(pi)].position;
     std::vector<ProbeRay> ray;
     std::vector<DirectSample> direct;
-    lighter.trace(size_t(pi), p, ray);
-    lighter.direct(p, direct);
+    lighter.observe(size_t(pi), p, ray, direct);
     std::map<SetKey, Sh> sets;
     auto set = [&](uint16_t kind, int light, int object) -> Sh& {
       auto [it, fresh] = sets.try_emplace(SetKey{kind, light, object});
@@ -302,7 +311,7 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
   report.stage_time("probes", seconds);
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& r = report.root()["probes"];
-  r["rays_per_probe"] = rays;
+  r["rays_per_probe"] = options.rays;
   r["sets"] = probes.sets.size();
   r["entries"] = entries;
 }
@@ -311,19 +320,16 @@ std::vector<std::array<float, pack::kProbeShCount * 3>> bake_state_probes(
     const ProbeBake& probes, const Scene& scene, const Layout& layout, const TexelSet& texels,
     const Tracer& tracer, const FloatImage& state_map, const StateSpec& state,
     const ProbeOptions& options) {
-  const int rays = options.rays;
-  if (rays <= 0) throw CookError("light probes need at least one gather ray");
   const ResolvedState resolved = resolve_state(scene, state);
-  const ProbeLighter lighter(scene, layout, texels, tracer, rays, options.seed);
-  const float ray_weight = 4.0f * kPi / float(rays);
+  const ProbeLighter lighter(scene, layout, texels, tracer, options.rays, options.seed);
+  const float ray_weight = lighter.ray_weight();
   std::vector<Sh> out(probes.probes.size());
   parallel_for(int(probes.probes.size()), worker_count(options.threads), [&](int pi) {
     set_worker_fp_mode();
     const glm::vec3 p = probes.probes[size_t(pi)].position;
     std::vector<ProbeRay> ray;
     std::vector<DirectSample> direct;
-    lighter.trace(size_t(pi), p, ray);
-    lighter.direct(p, direct);
+    lighter.observe(size_t(pi), p, ray, direct);
     Sh& sh = out[size_t(pi)];
     sh.fill(0.0f);
     for (const ProbeRay& r : ray) {

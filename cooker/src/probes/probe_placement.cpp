@@ -65,12 +65,17 @@ ProbeBake place_probes(const Scene& scene, const Tracer& tracer, const ProbeOpti
       scene.bounds_min + 0.5f * (extent - spacing * glm::vec3(size - glm::ivec3(1)));
   const size_t count = size_t(size.x) * size_t(size.y) * size_t(size.z);
   const int threads = worker_count(options.threads);
+  // Grid point i (x fastest, pack::ProbeGridRecord's order).
+  auto point = [&](size_t i) {
+    const glm::ivec3 g(int(i % size_t(size.x)), int(i / size_t(size.x) % size_t(size.y)),
+                       int(i / (size_t(size.x) * size_t(size.y))));
+    return origin + spacing * glm::vec3(g);
+  };
 
   std::vector<uint8_t> inside(count, 0);
   parallel_for(int(count), threads, [&](int i) {
     set_worker_fp_mode();
-    const glm::ivec3 g(i % size.x, (i / size.x) % size.y, i / (size.x * size.y));
-    const glm::vec3 p = origin + spacing * glm::vec3(g);
+    const glm::vec3 p = point(size_t(i));
     int back = 0;
     for (int r = 0; r < kValidityRays; ++r) {
       const glm::vec3 dir = sphere_direction(r, kValidityRays, 0.0f);
@@ -87,10 +92,9 @@ ProbeBake place_probes(const Scene& scene, const Tracer& tracer, const ProbeOpti
   out.grid_index.assign(count, pack::kNone32);
   for (size_t i = 0; i < count; ++i) {
     if (inside[i]) continue;
-    const glm::ivec3 g(int(i) % size.x, (int(i) / size.x) % size.y, int(i) / (size.x * size.y));
     out.grid_index[i] = uint32_t(out.probes.size());
     ProbeBake::Probe probe;
-    probe.position = origin + spacing * glm::vec3(g);
+    probe.position = point(i);
     out.probes.push_back(std::move(probe));
   }
   const size_t grid_kept = out.probes.size();

@@ -97,6 +97,7 @@ class LightProbes {
   // Factor(l, rgb) gives light l's factor, Visible(o) object o's visibility.
   template <typename Factor, typename Visible>
   Status apply(Factor&& factor, Visible&& visible, bool from_zero);
+  Status apply_state(const SceneState& state, bool from_zero);
 
   PackView pack_;
   double* accumulator_ = nullptr;  // [probe * 27 + k * 3 + c]

@@ -112,16 +112,18 @@ bool same_pack(const PackView& pack, const SceneState& state) {
 
 }  // namespace
 
-Status LightProbes::update(const SceneState& state) {
+Status LightProbes::apply_state(const SceneState& state, bool from_zero) {
   if (!same_pack(pack_, state)) return Status::kInvalidArgument;
   return apply([&](uint32_t l, float out[3]) { state.light_factor(l, out); },
-               [&](uint32_t o) { return state.object_visible(o); }, false);
+               [&](uint32_t o) { return state.object_visible(o); }, from_zero);
+}
+
+Status LightProbes::update(const SceneState& state) {
+  return apply_state(state, false);
 }
 
 Status LightProbes::rebuild(const SceneState& state) {
-  if (!same_pack(pack_, state)) return Status::kInvalidArgument;
-  return apply([&](uint32_t l, float out[3]) { state.light_factor(l, out); },
-               [&](uint32_t o) { return state.object_visible(o); }, true);
+  return apply_state(state, true);
 }
 
 Status LightProbes::update(const Planner& planner) {
