@@ -78,10 +78,11 @@ struct PathState {
 
 class PathTracer {
  public:
-  PathTracer(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
-             const ResolvedState& state, uint64_t seed, bool texel_patch)
+  PathTracer(const Scene& scene, const TexelSet& texels, const std::vector<uint8_t>& traced,
+             const Tracer& tracer, const ResolvedState& state, uint64_t seed, bool texel_patch)
       : scene_(scene),
         texels_(texels),
+        traced_(traced),
         tracer_(tracer),
         visible_(state.visible),
         emissive_(scene),
@@ -102,13 +103,13 @@ class PathTracer {
     extent_ = 1.5f * scale;  // any segment inside the bounds is shorter than the diagonal
   }
 
-  // Traces samples [s0, s1) of the valid texels of row y; the estimate of sample s of the row's
-  // k-th valid texel goes to values[k * (s1 - s0) + s - s0].
+  // Traces samples [s0, s1) of the traced texels of row y; the estimate of sample s of the row's
+  // k-th traced texel goes to values[k * (s1 - s0) + s - s0].
   void trace_row(int y, int s0, int s1, std::vector<glm::vec3>& values) const {
     std::vector<PathState> active, next;
     for (int x = 0; x < texels_.width; ++x) {
       const size_t t = texels_.index(x, y);
-      if (!texels_.valid[t]) continue;
+      if (!traced_[t]) continue;
       for (int s = s0; s < s1; ++s) {
         PathState p;
         p.position = footprints_.empty() ? texels_.position[t]
@@ -316,6 +317,7 @@ class PathTracer {
 
   const Scene& scene_;
   const TexelSet& texels_;
+  const std::vector<uint8_t>& traced_;  // valid texels of the region
   const Tracer& tracer_;
   const std::vector<uint8_t>& visible_;
   EmissiveLights emissive_;
@@ -355,11 +357,11 @@ void texel_estimate(const Accumulator& acc, size_t t, int n, glm::vec3* mean, gl
   }
 }
 
-Noise noise_of(const Accumulator& acc, const TexelSet& texels, int n) {
+Noise noise_of(const Accumulator& acc, const std::vector<uint8_t>& traced, int n) {
   std::vector<float> peaks;
   double se2 = 0.0, m2 = 0.0;
-  for (size_t t = 0; t < texels.valid.size(); ++t) {
-    if (!texels.valid[t]) continue;
+  for (size_t t = 0; t < traced.size(); ++t) {
+    if (!traced[t]) continue;
     glm::vec3 m, se;
     texel_estimate(acc, t, n, &m, &se);
     peaks.push_back(max3(m));
@@ -376,8 +378,8 @@ Noise noise_of(const Accumulator& acc, const TexelSet& texels, int n) {
   double sum = 0.0;
   size_t count = 0;
   size_t i = 0;
-  for (size_t t = 0; t < texels.valid.size(); ++t) {
-    if (!texels.valid[t]) continue;
+  for (size_t t = 0; t < traced.size(); ++t) {
+    if (!traced[t]) continue;
     const float peak = peaks[i++];
     if (!(peak > 0.0f) || peak < matter) continue;
     glm::vec3 m, se;
@@ -406,7 +408,13 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t rays0 = tracer.rays_traced();
   const int threads = worker_count(options.threads);
-  const PathTracer tracer_of_paths(scene, texels, tracer, resolved, options.seed,
+  if (!options.region.empty() && options.region.size() != texels.valid.size())
+    throw CookError("the reference's region has " + std::to_string(options.region.size()) +
+                    " flags for " + std::to_string(texels.valid.size()) + " texels");
+  std::vector<uint8_t> traced(texels.valid.size());
+  for (size_t t = 0; t < traced.size(); ++t)
+    traced[t] = texels.valid[t] && (options.region.empty() || options.region[t]);
+  const PathTracer tracer_of_paths(scene, texels, traced, tracer, resolved, options.seed,
                                    options.texel_patch);
   const int w = texels.width, h = texels.height;
   Accumulator acc(texels.position.size());
@@ -421,7 +429,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
       size_t k = 0;
       for (int x = 0; x < w; ++x) {
         const size_t t = texels.index(x, y);
-        if (!texels.valid[t]) continue;
+        if (!traced[t]) continue;
         for (int s = s0; s < s1; ++s, ++k) {
           for (int c = 0; c < 3; ++c) {
             const double v = values[k][c];
@@ -438,7 +446,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
     if (s1 < options.samples && (s1 & (s1 - 1)) == 0) {
       const bool check = options.target_noise > 0.0 && s1 >= kMinTargetSamples;
       if (check || !progress.quiet()) {
-        const Noise n = noise_of(acc, texels, s1);
+        const Noise n = noise_of(acc, traced, s1);
         progress.message("reference: " + std::to_string(s1) +
                          " samples, mean relative standard "
                          "error " +
@@ -456,7 +464,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const size_t t = texels.index(x, y);
-      if (!texels.valid[t]) continue;
+      if (!traced[t]) continue;
       glm::vec3 m, se;
       texel_estimate(acc, t, done, &m, &se);
       for (int c = 0; c < 3; ++c) {
@@ -465,7 +473,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
       }
     }
   }
-  const Noise noise = noise_of(acc, texels, done);
+  const Noise noise = noise_of(acc, traced, done);
   out.mean_rel_std_error = noise.mean_rel;
   out.rel_rmse_noise = noise.rel_rmse;
   out.rays = tracer.rays_traced() - rays0;

@@ -253,6 +253,29 @@ scenegen::SceneBuilder small_room_with_uv1() {
   return room_of(floor, pillar, crate, 0.0f);
 }
 
+scenegen::SceneBuilder thin_panel_room() {
+  using namespace scenegen;
+  SceneBuilder b;
+  const int plaster = b.add_material({.name = "plaster", .base_color = {0.7f, 0.7f, 0.7f, 1.0f}});
+  const int wood = b.add_material({.name = "wood", .base_color = {0.55f, 0.38f, 0.22f, 1.0f}});
+  b.add_mesh_node("room", make_box({-2.0f, 0.0f, -2.0f}, {2.0f, 2.5f, 2.0f}, Facing::kInward),
+                  plaster);
+  b.add_mesh_node("panel", make_box({1.93f, 0.0f, -0.6f}, {1.95f, 1.3f, 0.6f}), wood, {},
+                  /*semi_dynamic=*/true);
+  b.add_light_node(
+      "lamp",
+      {.name = "lamp", .type = LightType::kPoint, .color = {1.0f, 0.85f, 0.7f}, .intensity = 8.0f},
+      {0.9f, 1.6f, 1.1f}, {0, -1, 0}, /*semi_dynamic=*/true, /*light_radius=*/0.05f);
+  b.add_light_node("spot",
+                   {.name = "spot",
+                    .type = LightType::kSpot,
+                    .intensity = 60.0f,
+                    .inner_cone_angle = 0.3f,
+                    .outer_cone_angle = 0.45f},
+                   {0.0f, 2.45f, 0.0f}, {0.0f, -1.0f, 0.0f});
+  return b;
+}
+
 std::vector<std::uint8_t> png(int w, int h, const std::vector<std::uint8_t>& rgb) {
   std::vector<std::uint8_t> out;
   stbi_write_png_to_func(

@@ -71,4 +71,13 @@ scenegen::SceneBuilder small_room(float lamp_radius = 0.0f);
 // [0,1]^2, so the cooker uses them verbatim and the layout does not depend on vertex order.
 scenegen::SceneBuilder small_room_with_uv1();
 
+// Bounce light beside a thin object (issue 11's third accuracy scene): a closed 4 x 2.5 x 4 m room
+// ("room", inward-facing plaster, albedo 0.7), a 2 cm thick wooden panel ("panel", semi-dynamic,
+// 1.2 m wide, 1.3 m tall) standing 5 cm in front of the +X wall, a semi-dynamic point lamp
+// ("lamp", 8 cd, radius 5 cm) that lights that wall and the panel's face obliquely, and a static
+// spot ("spot", 60 cd) aimed straight down whose cone reaches only the floor, so with the lamp
+// off every wall is lit by bounce light alone. Big quads (two triangles a face); light-map UVs
+// are left to the cooker's unwrap.
+scenegen::SceneBuilder thin_panel_room();
+
 }  // namespace lightpatch::test

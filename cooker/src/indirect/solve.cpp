@@ -269,10 +269,16 @@ std::vector<float> near_field(const GatherOperator& op) {
   const float reach = kNearFieldSpacings * coarse_spacing(grid);
   std::vector<float> out(grid.size(), 0.0f);
   if (op.rays <= 0) return out;
+  std::vector<uint32_t> first(size_t(op.rays));  // what each of c's rays meets first
   for (size_t c = 0; c < grid.size(); ++c) {
+    std::copy_n(op.hit.begin() + ptrdiff_t(c * size_t(op.rays)), op.rays, first.begin());
+    // An object the ray crosses lies in front of its static hit (the nearest is listed first).
+    for (uint32_t k = op.crossing_offset[c]; k < op.crossing_offset[c + 1]; ++k) {
+      const Crossing& x = op.crossings[k];
+      if (x.count > 0) first[x.ray] = op.crossing_hits[x.first].coarse;
+    }
     float sum = 0.0f;
-    for (size_t r = c * size_t(op.rays); r < (c + 1) * size_t(op.rays); ++r) {
-      const uint32_t h = op.hit[r];
+    for (const uint32_t h : first) {
       if (h >= grid.size()) continue;  // a miss or the back of a surface: far
       sum += std::exp(-glm::length(grid.position[h] - grid.position[c]) / reach);
     }

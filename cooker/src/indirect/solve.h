@@ -92,8 +92,11 @@ float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& pr
 // How much nearby geometry fills each coarse texel's hemisphere: the mean over its gather rays of
 // exp(-d / (kNearFieldSpacings * the coarse texels' spacing)), d the distance to what the ray hits
 // (0 for a miss or a back face). High where a surface meets another (a floor at a wall's foot,
-// under a shelf), where bounce light falls off within a few texels (ambient occlusion): the
-// denoiser keeps such texels apart from open ones. From geometry only.
+// under a shelf, a wall behind a panel), where bounce light falls off within a few texels
+// (ambient occlusion): the denoiser keeps such texels apart from open ones. From geometry only:
+// what a ray meets first with every object present (an object in front of the static hit counts),
+// the same guide for every map and every state, so the filter stays linear and the decomposition
+// exact.
 constexpr float kNearFieldSpacings = 4.0f;
 // The denoiser's near-field scale: at least twice the worst-case standard error of a mean of N
 // values in [0, 1] (0.5 / sqrt(N)), so that the guide's own noise does not stop the filter on open

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/progress.h"
@@ -39,6 +40,11 @@ struct ReferenceOptions {
   // its own point of it), as the cook's preview and production presets define it; false: at its
   // sample point, as a cook with one texel sample (draft) does.
   bool texel_patch = true;
+  // Empty: every valid texel. Otherwise one flag per texel of the set: only the valid texels
+  // flagged are traced (a region's reference at a fraction of the cost; the others stay 0 and are
+  // left out of the noise figures). Footprints still come from the whole set, so a flagged texel
+  // is defined as in a full bake.
+  std::vector<uint8_t> region;
 };
 
 struct ReferenceBake {
