@@ -79,14 +79,16 @@ struct PathState {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const TexelSet& texels, const std::vector<uint8_t>& traced,
-             const Tracer& tracer, const ResolvedState& state, uint64_t seed, bool texel_patch)
+             const Tracer& tracer, const ResolvedState& state, uint64_t seed, bool texel_patch,
+             int threads)
       : scene_(scene),
         texels_(texels),
         traced_(traced),
         tracer_(tracer),
         visible_(state.visible),
         emissive_(scene),
-        footprints_(texel_patch ? texel_footprints(texels) : std::vector<TexelFootprint>()),
+        footprints_(texel_patch ? texel_footprints(texels, &tracer, threads)
+                                : std::vector<TexelFootprint>()),
         seed_(seed) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
       if (max3(state.radiant[i]) > 0.0f) lights_.push_back({&scene.lights[i], state.radiant[i]});
@@ -415,7 +417,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
   for (size_t t = 0; t < traced.size(); ++t)
     traced[t] = texels.valid[t] && (options.region.empty() || options.region[t]);
   const PathTracer tracer_of_paths(scene, texels, traced, tracer, resolved, options.seed,
-                                   options.texel_patch);
+                                   options.texel_patch, threads);
   const int w = texels.width, h = texels.height;
   Accumulator acc(texels.position.size());
   const int passes = (options.samples + kPassSamples - 1) / kPassSamples;

@@ -1,9 +1,11 @@
 #include "texel_footprint.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "direct_light.h"
+#include "worker_pool.h"
 
 namespace lightpatch::cooker {
 
@@ -17,7 +19,8 @@ constexpr float kSameSurfaceCos = 0.7f;
 
 }  // namespace
 
-std::vector<TexelFootprint> texel_footprints(const TexelSet& texels) {
+std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Tracer* tracer,
+                                             int threads) {
   const int w = texels.width, h = texels.height;
   std::vector<TexelFootprint> out(texels.position.size());
   auto same = [&](size_t a, int x, int y) {
@@ -61,6 +64,31 @@ std::vector<TexelFootprint> texel_footprints(const TexelSet& texels) {
       axis(0, 1, &f.v, &f.b0, &f.b1);
     }
   }
+  if (!tracer) return out;
+  const float eps = tracer->epsilon();
+  parallel_for(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t t = texels.index(x, y);
+      if (!texels.valid[t]) continue;
+      TexelFootprint& f = out[t];
+      const glm::vec3 origin = texels.position[t] + texels.normal[t] * eps;
+      uint16_t open = 0;
+      for (int j = 0; j < kFootprintCells; ++j) {
+        for (int i = 0; i < kFootprintCells; ++i) {
+          const float a = f.a0 + (float(i) + 0.5f) / kFootprintCells * (f.a1 - f.a0);
+          const float b = f.b0 + (float(j) + 0.5f) / kFootprintCells * (f.b1 - f.b0);
+          const glm::vec3 d = f.u * a + f.v * b;
+          const float len = glm::length(d);
+          bool closed = false;
+          if (len > eps) {
+            closed = tracer->intersect(origin, d / len, 0.0f, len, false).hit;
+          }
+          if (!closed) open |= uint16_t(1u << (i + kFootprintCells * j));
+        }
+      }
+      f.open = open != 0 ? open : uint16_t(0xFFFF);
+    }
+  });
   return out;
 }
 
@@ -70,6 +98,16 @@ glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int 
   double b = hash_to_unit(sample_hash(rng, 1, 2, 3)) + kA2 * double(k + 1);
   a -= std::floor(a);
   b -= std::floor(b);
+  if (f.open != 0xFFFF) {
+    // a picks one of the open cells and its place along a within it: uniform over the open part.
+    const int count = std::popcount(f.open);
+    const double scaled = a * count;
+    int pick = std::min(count - 1, int(scaled)), cell = 0;
+    for (; cell < kFootprintCells * kFootprintCells; ++cell)
+      if ((f.open >> cell & 1u) && pick-- == 0) break;
+    a = (double(cell % kFootprintCells) + (scaled - std::floor(scaled))) / kFootprintCells;
+    b = (double(cell / kFootprintCells) + b) / kFootprintCells;
+  }
   return centre + f.u * (f.a0 + float(a) * (f.a1 - f.a0)) + f.v * (f.b0 + float(b) * (f.b1 - f.b0));
 }
 

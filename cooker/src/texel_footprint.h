@@ -10,23 +10,36 @@
 #include <vector>
 
 #include "lightpatch/cooker/texels.h"
+#include "lightpatch/cooker/tracer.h"
 
 namespace lightpatch::cooker {
 
 // Points of the texel's surface patch: sample point + a u + b v, (a, b) in [a0, a1] x [b0, b1].
 // u and v step to the next texel along the page's x and y, in the surface's tangent plane; a
 // side without a neighbouring texel of the same surface (a chart's edge, or a neighbour pushed
-// out of solid geometry) is not entered (its bound is 0).
+// out of solid geometry) is not entered (its bound is 0). The patch is cut in kFootprintCells x
+// kFootprintCells cells; `open` flags those in the open (bit i + kFootprintCells * j: cell i
+// along a, j along b): a cell behind static geometry standing on the surface (the part of a
+// wall's texel under a table, of a floor's under a wall) is no part of the visible surface and
+// is never sampled. The cook's direct light and gathering and the reference path tracer all
+// sample the same open cells, so they define a texel's light the same way.
+constexpr int kFootprintCells = 4;
 struct TexelFootprint {
   glm::vec3 u{0.0f}, v{0.0f};
   float a0 = 0.0f, a1 = 0.0f, b0 = 0.0f, b1 = 0.0f;
+  uint16_t open = 0xFFFF;
 };
 
-// One footprint per texel (zero for invalid texels).
-std::vector<TexelFootprint> texel_footprints(const TexelSet& texels);
+// One footprint per texel (zero for invalid texels). With `tracer`, a cell is closed when a
+// static surface stands between the texel's sample point and the cell's centre (along the
+// surface, just above it: a wall standing on the floor, a table against the wall); semi-dynamic
+// objects do not close cells, so every state samples the same points. A texel with no open cell
+// keeps them all (its sample point is in the open: texel_builder.cpp pushes it out).
+std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Tracer* tracer = nullptr,
+                                             int threads = 1);
 
-// Point k of a spread of points over a footprint (the R2 low-discrepancy sequence, rotated per
-// texel by `rng`): the same points for the same (k, rng).
+// Point k of a spread of points over a footprint's open cells (the R2 low-discrepancy sequence,
+// rotated per texel by `rng`): the same points for the same (k, rng).
 glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k, uint64_t rng);
 
 }  // namespace lightpatch::cooker

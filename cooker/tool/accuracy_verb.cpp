@@ -647,8 +647,8 @@ int verb_accuracy(Args& args) {
     pt_options.region[i] = judged(ref_layout.texels, scene, i);
   Hasher hasher;
   // v3: a texel's value is its mean over its surface patch (texel_footprint.h); v4: the judged
-  // texels only.
-  hasher.text(o.path_traced ? "lightpatch accuracy reference v4: path tracing"
+  // texels only; v5: the patch less the cells behind static geometry.
+  hasher.text(o.path_traced ? "lightpatch accuracy reference v5: path tracing"
                             : "lightpatch accuracy reference v1");
   {
     const std::vector<uint8_t> file = read_file(o.scene_path);

@@ -162,7 +162,7 @@ BakeContext::BakeContext(const Scene& s, const Layout& l, const TexelSet& t, con
   threads = worker_count(o.threads);
   area_samples = o.area_samples > 0 ? o.area_samples : preset_samples(o.quality);
   texel_samples = o.texel_samples > 0 ? o.texel_samples : preset_texel_samples(o.quality);
-  if (texel_samples > 1) footprints = texel_footprints(texels);
+  if (texel_samples > 1) footprints = texel_footprints(texels, &tracer, threads);
   eps = tracer.epsilon();
   const float scale = scene.scale() > 0.0f ? scene.scale() : 1.0f;
   extent = 1.5f * scale;  // any segment inside the bounds is shorter than the diagonal

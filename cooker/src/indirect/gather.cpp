@@ -365,8 +365,12 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         u -= std::floor(u);
         v -= std::floor(v);
         const glm::vec3 n = texels.normal[t];
-        rays[size_t(k)] = {texels.position[t] + n * eps, eps, cosine_dir(n, float(u), float(v)),
-                           extent};
+        const glm::vec3 p =
+            options.footprints
+                ? footprint_point((*options.footprints)[t], texels.position[t], k / int(mc),
+                                  sample_hash(options.seed, t, 0x7061746368ull, 0))
+                : texels.position[t];
+        rays[size_t(k)] = {p + n * eps, eps, cosine_dir(n, float(u), float(v)), extent};
       }
       tracer.intersect_many(rays.data(), n_rays, first.data(), true);
       // The texels under the hits are far apart in memory: fetched for all rays at once, their

@@ -24,6 +24,7 @@
 #include "lightpatch/cooker/scene.h"
 #include "lightpatch/cooker/texels.h"
 #include "lightpatch/cooker/tracer.h"
+#include "texel_footprint.h"
 
 namespace lightpatch::cooker {
 
@@ -104,6 +105,10 @@ struct GatherOptions {
   int rays = 256;  // per coarse texel
   uint64_t seed = 1;
   int threads = 1;
+  // Parallel to the texels, or null: each ray leaves its own point of its texel's patch
+  // (texel_footprint.h), as the direct light and the reference path tracer sample it; null: the
+  // texel's sample point (one texel sample, draft).
+  const std::vector<TexelFootprint>* footprints = nullptr;
 };
 
 struct GatherOperator {

@@ -46,6 +46,7 @@ class GatherIntegrator final : public IndirectIntegrator {
       go.rays = preset_.rays;
       go.seed = b.options.seed;
       go.threads = b.threads;
+      if (!b.footprints.empty()) go.footprints = &b.footprints;
       op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
       report.stage_time("bake.gather_rays", progress.end());
       if (store) store->save(op_, progress);
