@@ -50,7 +50,9 @@ class GatherIntegrator final : public IndirectIntegrator {
       report.stage_time("bake.gather_rays", progress.end());
       if (store) store->save(op_, progress);
     }
-    near_ = near_field(op_);
+    const std::vector<float> near = near_field(op_);
+    reach_ = gather_reach(op_, b.threads);
+    denoise_ = denoise_weights(op_.grid, preset_.denoise, &near, near_field_sigma(op_.rays));
   }
 
   GroupBounce prepare(const FloatImage& direct, float threshold) const override {
@@ -84,7 +86,7 @@ class GatherIntegrator final : public IndirectIntegrator {
   }
 
   void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const override {
-    denoise(op_.grid, preset_.denoise, map, &near_, near_field_sigma(op_.rays));
+    denoise(op_.grid, denoise_, map);
     add_magnified(op_.grid, b_.texels, map, fine);
     const int s = b_.layout.align;
     if (s > 1 && blocks) *blocks = block_image(op_.grid, b_.texels, s, map);
@@ -124,6 +126,7 @@ class GatherIntegrator final : public IndirectIntegrator {
     so.tolerance = kBounceTolerance * threshold * (1.0f - op_.mean_albedo);
     so.max_bounces = 1024;
     so.threads = threads;
+    so.reach = &reach_;
     return so;
   }
 
@@ -143,7 +146,8 @@ class GatherIntegrator final : public IndirectIntegrator {
   const BakeContext& b_;
   GatherPreset preset_;
   GatherOperator op_;
-  std::vector<float> near_;  // near_field(op_): the denoiser's guide
+  GatherReach reach_;
+  DenoiseWeights denoise_;  // guided by near_field(op_)
   mutable Tally groups_, changes_, states_;
 };
 

@@ -34,15 +34,22 @@ bool present_hit(const GatherOperator& op, const Crossing& rec, const std::vecto
   return false;
 }
 
-// Receivers whose rays can reach a non-zero source, plus `extra`, in coarse order.
+// Receivers whose rays (of `level`, with `reach`) can reach a non-zero source, in coarse order.
 std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& src,
-                                   const std::vector<uint32_t>& extra) {
+                                   const GatherReach* reach, int level) {
   const size_t n_tiles = op.tile_coarse.size();
   std::vector<uint8_t> active(n_tiles, 0);
   for (uint32_t c = 0; c < src.size(); ++c)
     if (src[c] != glm::vec3(0.0f)) active[op.tile_of[c]] = 1;
   std::vector<uint8_t> take(src.size(), 0);
-  for (size_t t = 0; t < n_tiles; ++t) {
+  for (size_t t = 0; t < n_tiles && reach; ++t) {
+    if (!active[t]) continue;
+    const size_t at = t * GatherOperator::kLevels;
+    for (uint32_t i = reach->offset[at]; i < reach->offset[at + GatherOperator::kLevels - level];
+         ++i)
+      take[reach->receivers[i]] = 1;
+  }
+  for (size_t t = 0; t < n_tiles && !reach; ++t) {
     bool any = false;
     for (uint32_t s : op.sources[t]) {
       if (active[s]) {
@@ -53,7 +60,6 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
     if (any)
       for (uint32_t c : op.tile_coarse[t]) take[c] = 1;
   }
-  for (uint32_t c : extra) take[c] = 1;
   std::vector<uint32_t> out;
   for (uint32_t c = 0; c < take.size(); ++c)
     if (take[c]) out.push_back(c);
@@ -158,8 +164,8 @@ Bounces run_series(const GatherOperator& op, const std::vector<uint8_t>& present
     for (size_t c = 0; c < nc; ++c) delta[c] *= g.albedo[c];
     CoarseMap next(nc, glm::vec3(0.0f));
     if (any) {
-      const std::vector<uint32_t> receivers = receivers_of(op, delta, {});
       const int level = GatherOperator::level_of(b);
+      const std::vector<uint32_t> receivers = receivers_of(op, delta, options.reach, level);
       gather_into(op, present, delta, receivers, options.threads, level, next);
       if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.level_rays[level]);
     }
@@ -174,6 +180,64 @@ Bounces run_series(const GatherOperator& op, const std::vector<uint8_t>& present
 }
 
 }  // namespace
+
+GatherReach gather_reach(const GatherOperator& op, int threads) {
+  constexpr uint32_t kLevels = GatherOperator::kLevels;
+  const size_t nc = op.grid.size(), n_tiles = op.tile_coarse.size();
+  // A ray's class: how many levels leave it out (levels read prefixes, shorter level by level),
+  // so a receiver is in level l's list of a tile if its first ray there has class < kLevels - l.
+  auto class_of = [&](int k) {
+    uint32_t cls = 0;
+    for (uint32_t l = 0; l < kLevels; ++l) cls += k >= op.level_rays[l] ? 1 : 0;
+    return cls;
+  };
+  // Per receiver, in work items: each tile its rays reach once, as tile * kLevels + class.
+  const int items = int((nc + kChunk - 1) / kChunk);
+  std::vector<std::vector<uint32_t>> keys(static_cast<size_t>(items));
+  std::vector<uint32_t> per_receiver(nc, 0);
+  parallel_for(items, threads, [&](int item) {
+    std::vector<uint32_t> seen(n_tiles, kNoTexel);  // tile -> the receiver that last listed it
+    std::vector<uint32_t>& list = keys[size_t(item)];
+    const uint32_t end = uint32_t(std::min<size_t>(nc, size_t(item + 1) * kChunk));
+    for (uint32_t c = uint32_t(item) * kChunk; c < end; ++c) {
+      const size_t first = list.size();
+      const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
+      uint32_t rec = op.crossing_offset[c];
+      for (int k = 0; k < op.rays; ++k) {
+        const uint32_t cls = class_of(k);
+        auto add = [&](uint32_t coarse) {
+          if (coarse == kNoTexel) return;
+          const uint32_t t = op.tile_of[coarse];
+          if (seen[t] == c) return;
+          seen[t] = c;
+          list.push_back(t * kLevels + cls);
+        };
+        add(hits[k]);
+        for (; rec < op.crossing_offset[c + 1] && int(op.crossings[rec].ray) == k; ++rec) {
+          const Crossing& cr = op.crossings[rec];
+          for (uint32_t j = cr.first; j < cr.first + cr.count; ++j) add(op.crossing_hits[j].coarse);
+        }
+      }
+      per_receiver[c] = uint32_t(list.size() - first);
+    }
+  });
+  // Counting sort by (tile, class): receivers ascending within each.
+  GatherReach r;
+  r.offset.assign(n_tiles * kLevels + 1, 0);
+  for (const std::vector<uint32_t>& list : keys)
+    for (uint32_t key : list) ++r.offset[key + 1];
+  for (size_t i = 0; i + 1 < r.offset.size(); ++i) r.offset[i + 1] += r.offset[i];
+  r.receivers.resize(r.offset.back());
+  std::vector<uint32_t> next(r.offset.begin(), r.offset.end() - 1);
+  for (size_t item = 0; item < keys.size(); ++item) {
+    const uint32_t* key = keys[item].data();
+    const uint32_t end = uint32_t(std::min<size_t>(nc, (item + 1) * kChunk));
+    for (uint32_t c = uint32_t(item) * kChunk; c < end; ++c)
+      for (uint32_t i = 0; i < per_receiver[c]; ++i) r.receivers[next[*key++]++] = c;
+    std::vector<uint32_t>().swap(keys[item]);
+  }
+  return r;
+}
 
 CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const FloatImage& d) {
   const size_t ch = size_t(d.channels);
@@ -191,7 +255,7 @@ CoarseMap Bounces::total() const {
 
 Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const CoarseMap& source, const SolveOptions& options, SolveStats* stats) {
-  const std::vector<uint32_t> receivers = receivers_of(op, source, {});
+  const std::vector<uint32_t> receivers = receivers_of(op, source, options.reach, 0);
   CoarseMap first(source.size(), glm::vec3(0.0f));
   gather_into(op, present, source, receivers, options.threads, 0, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
@@ -223,7 +287,7 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
   CoarseMap first(nc, glm::vec3(0.0f));
   // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
   // on an object included: their tiles are among each tile's sources).
-  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, {});
+  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, options.reach, 0);
   gather_into(op, present, direct_change, receivers, options.threads, 0, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
   for (uint32_t c : crossing) {
@@ -285,18 +349,21 @@ float near_field_sigma(int rays) {
   return std::max(kNearFieldSigma, 1.0f / std::sqrt(float(std::max(rays, 1))));
 }
 
-void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vector<float>* near,
-             float near_sigma) {
-  levels = std::min(levels, CoarseGrid::kLinkSteps);
-  if (levels <= 0 || map.empty()) return;
+DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::vector<float>* near,
+                               float near_sigma) {
+  DenoiseWeights dw;
+  dw.levels = std::max(0, std::min(levels, CoarseGrid::kLinkSteps));
   const size_t nc = grid.size();
+  if (dw.levels == 0 || nc == 0) return dw;
+  constexpr size_t kTaps = DenoiseWeights::kTaps;
+  dw.weight.assign(size_t(dw.levels) * nc * kTaps, 0.0f);
+  dw.total.assign(size_t(dw.levels) * nc, 0.0f);
   const float spacing = coarse_spacing(grid);
   constexpr float kKernel[3] = {0.25f, 0.5f, 0.25f};
-  CoarseMap out(nc);
-  for (int level = 0; level < levels; ++level) {
+  for (int level = 0; level < dw.levels; ++level) {
     const float sigma = float(1 << level) * spacing;
     for (uint32_t c = 0; c < nc; ++c) {
-      glm::vec3 sum(0.0f);
+      const size_t at = size_t(level) * nc + c;
       float wsum = 0.0f;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
@@ -310,14 +377,44 @@ void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vect
             const float dn = ((*near)[c] - (*near)[q]) / near_sigma;
             w *= std::exp(-dn * dn);
           }
-          sum += w * map[q];
+          dw.weight[at * kTaps + size_t((dy + 1) * 3 + dx + 1)] = w;
           wsum += w;
         }
       }
+      dw.total[at] = wsum;
+    }
+  }
+  return dw;
+}
+
+void denoise(const CoarseGrid& grid, const DenoiseWeights& weights, CoarseMap& map) {
+  if (weights.levels <= 0 || map.empty()) return;
+  const size_t nc = map.size();
+  constexpr size_t kTaps = DenoiseWeights::kTaps;
+  CoarseMap out(nc);
+  for (int level = 0; level < weights.levels; ++level) {
+    for (uint32_t c = 0; c < nc; ++c) {
+      const size_t at = size_t(level) * nc + c;
+      const float* w = weights.weight.data() + at * kTaps;
+      glm::vec3 sum(0.0f);
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const uint32_t q = dx == 0 && dy == 0 ? c : grid.link(c, level, dx, dy);
+          if (q == kNoTexel || !grid.alive[q]) continue;
+          sum += w[(dy + 1) * 3 + dx + 1] * map[q];
+        }
+      }
+      const float wsum = weights.total[at];
       out[c] = wsum > 0.0f ? sum / wsum : map[c];
     }
     map.swap(out);
   }
+}
+
+void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vector<float>* near,
+             float near_sigma) {
+  if (levels <= 0 || map.empty()) return;
+  denoise(grid, denoise_weights(grid, levels, near, near_sigma), map);
 }
 
 FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,
