@@ -6,10 +6,12 @@
 
 #include <glm/glm.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "lightpatch/cooker/texels.h"
+#include "sample_hash.h"
 
 namespace lightpatch::cooker {
 
@@ -27,6 +29,15 @@ std::vector<TexelFootprint> texel_footprints(const TexelSet& texels);
 
 // Point k of a spread of points over a footprint (the R2 low-discrepancy sequence, rotated per
 // texel by `rng`): the same points for the same (k, rng).
-glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k, uint64_t rng);
+// Inline: a caller's loop over k hashes `rng` once.
+inline glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k,
+                                 uint64_t rng) {
+  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
+  double a = hash_to_unit(rng) + kA1 * double(k + 1);
+  double b = hash_to_unit(sample_hash(rng, 1, 2, 3)) + kA2 * double(k + 1);
+  a -= std::floor(a);
+  b -= std::floor(b);
+  return centre + f.u * (f.a0 + float(a) * (f.a1 - f.a0)) + f.v * (f.b0 + float(b) * (f.b1 - f.b0));
+}
 
 }  // namespace lightpatch::cooker
