@@ -129,6 +129,7 @@ class EmbreeTracer final : public Tracer {
 
   void release() {
     if (scene_) rtcReleaseScene(scene_);
+    if (objects_) rtcReleaseScene(objects_);
     for (size_t c = 1; c < children_.size(); ++c) {
       if (children_[c]) rtcReleaseScene(children_[c]);
     }
@@ -389,22 +390,32 @@ class EmbreeTracer final : public Tracer {
       check("attach geometry");
     }
     const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    // Each object is instanced twice: into the top level, and into a scene of the objects alone,
+    // which object-only queries traverse without walking the static geometry's BVH (masks prune
+    // only at its leaves).
+    if (has_objects_) objects_ = new_scene();
     for (size_t c = 1; c < children_.size(); ++c) {
       rtcCommitScene(children_[c]);
       check("commit child scene");
       if (!child_used[c]) continue;
-      RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
-      check("new instance");
-      rtcSetGeometryInstancedScene(inst, children_[c]);
-      rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
-      rtcSetGeometryMask(inst, kObjectMask);
-      rtcCommitGeometry(inst);
-      rtcAttachGeometry(scene_, inst);
-      rtcReleaseGeometry(inst);
-      check("attach instance");
+      for (RTCScene top : {scene_, objects_}) {
+        RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+        check("new instance");
+        rtcSetGeometryInstancedScene(inst, children_[c]);
+        rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+        rtcSetGeometryMask(inst, kObjectMask);
+        rtcCommitGeometry(inst);
+        rtcAttachGeometry(top, inst);
+        rtcReleaseGeometry(inst);
+        check("attach instance");
+      }
     }
     rtcCommitScene(scene_);
     check("commit scene");
+    if (objects_) {
+      rtcCommitScene(objects_);
+      check("commit object scene");
+    }
     // Scene-scaled offset, but never below what float positions of this magnitude can resolve.
     const float diag = scene.scale() > 0.0f ? scene.scale() : 1.0f;
     epsilon_ = std::max(1e-5f * diag, 64.0f * FLT_EPSILON * max_abs);
@@ -506,7 +517,7 @@ class EmbreeTracer final : public Tracer {
     qc.max_out = max_out;
     RTCRay ray;
     set_ray(ray, origin, dir, tmin, tmax, accept);
-    rtcOccluded1(scene_, &qc.ctx, &ray);
+    rtcOccluded1(accept == kObjectMask ? objects_ : scene_, &qc.ctx, &ray);
     return (qc.static_hit || ray.tfar < 0.0f) ? -1 : qc.count;
   }
 
@@ -587,6 +598,7 @@ class EmbreeTracer final : public Tracer {
   static constexpr unsigned kCounters = 16;
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
+  RTCScene objects_ = nullptr;  // the objects' instances alone (null without objects)
   std::vector<RTCScene> children_;  // [0] = scene_ (static geometry), [1 + o] object o or null
   std::vector<glm::vec3> object_lo_, object_hi_;
   bool masks_ = true;
