@@ -34,7 +34,8 @@ bool present_hit(const GatherOperator& op, const Crossing& rec, const std::vecto
   return false;
 }
 
-// Receivers whose rays (of `level`, with `reach`) can reach a non-zero source, in coarse order.
+// Receivers whose rays can reach a non-zero source, in coarse order: by tiles, then (with
+// `reach`) by each receiver's own rays of `level` where that costs less than the rays it spares.
 std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& src,
                                    const GatherReach* reach, int level) {
   const size_t n_tiles = op.tile_coarse.size();
@@ -42,14 +43,8 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
   for (uint32_t c = 0; c < src.size(); ++c)
     if (src[c] != glm::vec3(0.0f)) active[op.tile_of[c]] = 1;
   std::vector<uint8_t> take(src.size(), 0);
-  for (size_t t = 0; t < n_tiles && reach; ++t) {
-    if (!active[t]) continue;
-    const size_t at = t * GatherOperator::kLevels;
-    for (uint32_t i = reach->offset[at]; i < reach->offset[at + GatherOperator::kLevels - level];
-         ++i)
-      take[reach->receivers[i]] = 1;
-  }
-  for (size_t t = 0; t < n_tiles && !reach; ++t) {
+  size_t taken = 0;
+  for (size_t t = 0; t < n_tiles; ++t) {
     bool any = false;
     for (uint32_t s : op.sources[t]) {
       if (active[s]) {
@@ -57,8 +52,28 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
         break;
       }
     }
-    if (any)
+    if (any) {
       for (uint32_t c : op.tile_coarse[t]) take[c] = 1;
+      taken += op.tile_coarse[t].size();
+    }
+  }
+  if (reach) {
+    constexpr size_t kLevels = GatherOperator::kLevels;
+    // Tile t's receivers of this level.
+    auto first = [&](size_t t) { return reach->offset[t * kLevels]; };
+    auto last = [&](size_t t) { return reach->offset[t * kLevels + kLevels - size_t(level)]; };
+    size_t cost = 0;
+    for (size_t t = 0; t < n_tiles; ++t)
+      if (active[t]) cost += last(t) - first(t);
+    // A source lit almost everywhere (a group's direct light) is reached by every receiver: the
+    // marks would cost more than they spare.
+    if (4 * cost < taken * size_t(op.level_rays[level])) {
+      std::vector<uint8_t> marked(src.size(), 0);
+      for (size_t t = 0; t < n_tiles; ++t)
+        if (active[t])
+          for (uint32_t i = first(t); i < last(t); ++i) marked[reach->receivers[i]] = 1;
+      for (size_t c = 0; c < take.size(); ++c) take[c] &= marked[c];
+    }
   }
   std::vector<uint32_t> out;
   for (uint32_t c = 0; c < take.size(); ++c)
