@@ -206,16 +206,14 @@ GatherReach gather_reach(const GatherOperator& op, int threads) {
     for (uint32_t l = 0; l < kLevels; ++l) cls += k >= op.level_rays[l] ? 1 : 0;
     return cls;
   };
-  // Per receiver, in work items: each tile its rays reach once, as tile * kLevels + class.
-  const int items = int((nc + kChunk - 1) / kChunk);
-  std::vector<std::vector<uint32_t>> keys(static_cast<size_t>(items));
-  std::vector<uint32_t> per_receiver(nc, 0);
-  parallel_for(items, threads, [&](int item) {
+  // Calls emit(c, key) once for each tile that a receiver c of `item` reaches, key = tile *
+  // kLevels + the class of its first ray there; receivers in ascending order.
+  constexpr size_t kItems = 16;  // few: each item keeps a count per key
+  const size_t per_item = (nc + kItems - 1) / kItems;
+  auto walk = [&](size_t item, auto&& emit) {
     std::vector<uint32_t> seen(n_tiles, kNoTexel);  // tile -> the receiver that last listed it
-    std::vector<uint32_t>& list = keys[size_t(item)];
-    const uint32_t end = uint32_t(std::min<size_t>(nc, size_t(item + 1) * kChunk));
-    for (uint32_t c = uint32_t(item) * kChunk; c < end; ++c) {
-      const size_t first = list.size();
+    const uint32_t end = uint32_t(std::min(nc, (item + 1) * per_item));
+    for (uint32_t c = uint32_t(item * per_item); c < end; ++c) {
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       uint32_t rec = op.crossing_offset[c];
       for (int k = 0; k < op.rays; ++k) {
@@ -225,7 +223,7 @@ GatherReach gather_reach(const GatherOperator& op, int threads) {
           const uint32_t t = op.tile_of[coarse];
           if (seen[t] == c) return;
           seen[t] = c;
-          list.push_back(t * kLevels + cls);
+          emit(c, t * kLevels + cls);
         };
         add(hits[k]);
         for (; rec < op.crossing_offset[c + 1] && int(op.crossings[rec].ray) == k; ++rec) {
@@ -233,24 +231,33 @@ GatherReach gather_reach(const GatherOperator& op, int threads) {
           for (uint32_t j = cr.first; j < cr.first + cr.count; ++j) add(op.crossing_hits[j].coarse);
         }
       }
-      per_receiver[c] = uint32_t(list.size() - first);
     }
+  };
+  // A counting sort by key in two walks (no list of every pair held): count per item and key,
+  // then write each item's receivers after the earlier items' of the same key.
+  const size_t n_keys = n_tiles * kLevels;
+  std::vector<uint32_t> at(kItems * n_keys, 0);
+  parallel_for(int(kItems), threads, [&](int item) {
+    uint32_t* count = at.data() + size_t(item) * n_keys;
+    walk(size_t(item), [&](uint32_t, uint32_t key) { ++count[key]; });
   });
-  // Counting sort by (tile, class): receivers ascending within each.
   GatherReach r;
-  r.offset.assign(n_tiles * kLevels + 1, 0);
-  for (const std::vector<uint32_t>& list : keys)
-    for (uint32_t key : list) ++r.offset[key + 1];
-  for (size_t i = 0; i + 1 < r.offset.size(); ++i) r.offset[i + 1] += r.offset[i];
-  r.receivers.resize(r.offset.back());
-  std::vector<uint32_t> next(r.offset.begin(), r.offset.end() - 1);
-  for (size_t item = 0; item < keys.size(); ++item) {
-    const uint32_t* key = keys[item].data();
-    const uint32_t end = uint32_t(std::min<size_t>(nc, (item + 1) * kChunk));
-    for (uint32_t c = uint32_t(item) * kChunk; c < end; ++c)
-      for (uint32_t i = 0; i < per_receiver[c]; ++i) r.receivers[next[*key++]++] = c;
-    std::vector<uint32_t>().swap(keys[item]);
+  r.offset.assign(n_keys + 1, 0);
+  uint32_t total = 0;
+  for (size_t key = 0; key < n_keys; ++key) {
+    r.offset[key] = total;
+    for (size_t item = 0; item < kItems; ++item) {
+      const uint32_t n = at[item * n_keys + key];
+      at[item * n_keys + key] = total;
+      total += n;
+    }
   }
+  r.offset[n_keys] = total;
+  r.receivers.resize(total);
+  parallel_for(int(kItems), threads, [&](int item) {
+    uint32_t* next = at.data() + size_t(item) * n_keys;
+    walk(size_t(item), [&](uint32_t c, uint32_t key) { r.receivers[next[key]++] = c; });
+  });
   return r;
 }
 
