@@ -16,13 +16,6 @@ float max3(const glm::vec3& v) {
   return std::max({v.x, v.y, v.z});
 }
 
-uint64_t splitmix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 }  // namespace
 
 void orthonormal_basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b) {
@@ -39,14 +32,6 @@ glm::vec3 cosine_direction(const glm::vec3& n, float u, float v) {
   orthonormal_basis(n, t, b);
   const float z = std::sqrt(std::max(0.0f, 1.0f - u));
   return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
-}
-
-uint64_t sample_hash(uint64_t seed, uint64_t texel, uint64_t light, uint64_t sample) {
-  return splitmix(splitmix(splitmix(splitmix(seed) ^ texel) ^ light) ^ sample);
-}
-
-float hash_to_unit(uint64_t h) {
-  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
 }
 
 float spot_attenuation(const Light& light, const glm::vec3& to_point_unit) {

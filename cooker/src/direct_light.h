@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lightpatch/cooker/scene.h"
+#include "sample_hash.h"
 #include "texel_footprint.h"
 
 namespace lightpatch::cooker {
@@ -93,10 +94,6 @@ void orthonormal_basis(const glm::vec3& w, glm::vec3& t, glm::vec3& b);
 
 // A cosine-weighted direction about unit n for (u, v) in [0,1)^2 (density cos / pi).
 glm::vec3 cosine_direction(const glm::vec3& n, float u, float v);
-
-// Deterministic per-(seed, texel, light, sample) random numbers in [0,1).
-uint64_t sample_hash(uint64_t seed, uint64_t texel, uint64_t light, uint64_t sample);
-float hash_to_unit(uint64_t h);
 
 // Appends to `out` the shadow samples of one punctual light (intensity 1, white) for the texel at
 // p/n; `samples` per light with a radius (rounded down to a square, at least 1), one otherwise.

@@ -1,7 +1,6 @@
 #include "texel_footprint.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 
 #include "direct_light.h"
@@ -90,25 +89,6 @@ std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Trace
     }
   });
   return out;
-}
-
-glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k, uint64_t rng) {
-  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
-  double a = hash_to_unit(rng) + kA1 * double(k + 1);
-  double b = hash_to_unit(sample_hash(rng, 1, 2, 3)) + kA2 * double(k + 1);
-  a -= std::floor(a);
-  b -= std::floor(b);
-  if (f.open != 0xFFFF) {
-    // a picks one of the open cells and its place along a within it: uniform over the open part.
-    const int count = std::popcount(f.open);
-    const double scaled = a * count;
-    int pick = std::min(count - 1, int(scaled)), cell = 0;
-    for (; cell < kFootprintCells * kFootprintCells; ++cell)
-      if ((f.open >> cell & 1u) && pick-- == 0) break;
-    a = (double(cell % kFootprintCells) + (scaled - std::floor(scaled))) / kFootprintCells;
-    b = (double(cell / kFootprintCells) + b) / kFootprintCells;
-  }
-  return centre + f.u * (f.a0 + float(a) * (f.a1 - f.a0)) + f.v * (f.b0 + float(b) * (f.b1 - f.b0));
 }
 
 }  // namespace lightpatch::cooker

@@ -1,6 +1,7 @@
 // The final-gathering integrator (gather.h, solve.h) behind IndirectIntegrator.
 #include <atomic>
 #include <chrono>
+#include <mutex>
 
 #include "indirect/gather.h"
 #include "indirect/integrator.h"
@@ -51,7 +52,8 @@ class GatherIntegrator final : public IndirectIntegrator {
       report.stage_time("bake.gather_rays", progress.end());
       if (store) store->save(op_, progress);
     }
-    near_ = near_field(op_);
+    const std::vector<float> near = near_field(op_);
+    denoise_ = denoise_weights(op_.grid, preset_.denoise, &near, near_field_sigma(op_.rays));
   }
 
   GroupBounce prepare(const FloatImage& direct, float threshold) const override {
@@ -85,7 +87,7 @@ class GatherIntegrator final : public IndirectIntegrator {
   }
 
   void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const override {
-    denoise(op_.grid, preset_.denoise, map, &near_, near_field_sigma(op_.rays));
+    denoise(op_.grid, denoise_, map);
     add_magnified(op_.grid, b_.texels, map, fine);
     const int s = b_.layout.align;
     if (s > 1 && blocks) *blocks = block_image(op_.grid, b_.texels, s, map);
@@ -125,7 +127,24 @@ class GatherIntegrator final : public IndirectIntegrator {
     so.tolerance = kBounceTolerance * threshold * (1.0f - op_.mean_albedo);
     so.max_bounces = 1024;
     so.threads = threads;
+    so.reach = reach();
     return so;
+  }
+
+  // GatherReach spares reading rays whose sum is 0, but building it reads every stored ray
+  // once: built when the solves have read kReachAfter times as many (a scene of one open room,
+  // whose few solves see everything, never pays for it). Solves with and without it give the
+  // same bits.
+  static constexpr uint64_t kReachAfter = 4;
+  const GatherReach* reach() const {
+    if (reach_built_.load(std::memory_order_acquire)) return &reach_;
+    const uint64_t read = groups_.gathers + changes_.gathers + states_.gathers;
+    if (read < kReachAfter * uint64_t(op_.hit.size())) return nullptr;
+    std::call_once(reach_once_, [&] {
+      reach_ = gather_reach(op_, b_.threads);
+      reach_built_.store(true, std::memory_order_release);
+    });
+    return &reach_;
   }
 
   // Work done by one kind of solve: how many, their bounces and the stored rays they read.
@@ -144,7 +163,10 @@ class GatherIntegrator final : public IndirectIntegrator {
   const BakeContext& b_;
   GatherPreset preset_;
   GatherOperator op_;
-  std::vector<float> near_;  // near_field(op_): the denoiser's guide
+  mutable GatherReach reach_;
+  mutable std::once_flag reach_once_;
+  mutable std::atomic<bool> reach_built_{false};
+  DenoiseWeights denoise_;  // guided by near_field(op_)
   mutable Tally groups_, changes_, states_;
 };
 

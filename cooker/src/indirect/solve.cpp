@@ -34,14 +34,16 @@ bool present_hit(const GatherOperator& op, const Crossing& rec, const std::vecto
   return false;
 }
 
-// Receivers whose rays can reach a non-zero source, plus `extra`, in coarse order.
+// Receivers whose rays can reach a non-zero source, in coarse order: by tiles, then (with
+// `reach`) by each receiver's own rays of `level` where that costs less than the rays it spares.
 std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& src,
-                                   const std::vector<uint32_t>& extra) {
+                                   const GatherReach* reach, int level) {
   const size_t n_tiles = op.tile_coarse.size();
   std::vector<uint8_t> active(n_tiles, 0);
   for (uint32_t c = 0; c < src.size(); ++c)
     if (src[c] != glm::vec3(0.0f)) active[op.tile_of[c]] = 1;
   std::vector<uint8_t> take(src.size(), 0);
+  size_t taken = 0;
   for (size_t t = 0; t < n_tiles; ++t) {
     bool any = false;
     for (uint32_t s : op.sources[t]) {
@@ -50,10 +52,29 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
         break;
       }
     }
-    if (any)
+    if (any) {
       for (uint32_t c : op.tile_coarse[t]) take[c] = 1;
+      taken += op.tile_coarse[t].size();
+    }
   }
-  for (uint32_t c : extra) take[c] = 1;
+  if (reach) {
+    constexpr size_t kLevels = GatherOperator::kLevels;
+    // Tile t's receivers of this level.
+    auto first = [&](size_t t) { return reach->offset[t * kLevels]; };
+    auto last = [&](size_t t) { return reach->offset[t * kLevels + kLevels - size_t(level)]; };
+    size_t cost = 0;
+    for (size_t t = 0; t < n_tiles; ++t)
+      if (active[t]) cost += last(t) - first(t);
+    // A source lit almost everywhere (a group's direct light) is reached by every receiver: the
+    // marks would cost more than they spare.
+    if (4 * cost < taken * size_t(op.level_rays[level])) {
+      std::vector<uint8_t> marked(src.size(), 0);
+      for (size_t t = 0; t < n_tiles; ++t)
+        if (active[t])
+          for (uint32_t i = first(t); i < last(t); ++i) marked[reach->receivers[i]] = 1;
+      for (size_t c = 0; c < take.size(); ++c) take[c] &= marked[c];
+    }
+  }
   std::vector<uint32_t> out;
   for (uint32_t c = 0; c < take.size(); ++c)
     if (take[c]) out.push_back(c);
@@ -158,8 +179,8 @@ Bounces run_series(const GatherOperator& op, const std::vector<uint8_t>& present
     for (size_t c = 0; c < nc; ++c) delta[c] *= g.albedo[c];
     CoarseMap next(nc, glm::vec3(0.0f));
     if (any) {
-      const std::vector<uint32_t> receivers = receivers_of(op, delta, {});
       const int level = GatherOperator::level_of(b);
+      const std::vector<uint32_t> receivers = receivers_of(op, delta, options.reach, level);
       gather_into(op, present, delta, receivers, options.threads, level, next);
       if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.level_rays[level]);
     }
@@ -174,6 +195,71 @@ Bounces run_series(const GatherOperator& op, const std::vector<uint8_t>& present
 }
 
 }  // namespace
+
+GatherReach gather_reach(const GatherOperator& op, int threads) {
+  constexpr uint32_t kLevels = GatherOperator::kLevels;
+  const size_t nc = op.grid.size(), n_tiles = op.tile_coarse.size();
+  // A ray's class: how many levels leave it out (levels read prefixes, shorter level by level),
+  // so a receiver is in level l's list of a tile if its first ray there has class < kLevels - l.
+  auto class_of = [&](int k) {
+    uint32_t cls = 0;
+    for (uint32_t l = 0; l < kLevels; ++l) cls += k >= op.level_rays[l] ? 1 : 0;
+    return cls;
+  };
+  // Calls emit(c, key) once for each tile that a receiver c of `item` reaches, key = tile *
+  // kLevels + the class of its first ray there; receivers in ascending order.
+  constexpr size_t kItems = 16;  // few: each item keeps a count per key
+  const size_t per_item = (nc + kItems - 1) / kItems;
+  auto walk = [&](size_t item, auto&& emit) {
+    std::vector<uint32_t> seen(n_tiles, kNoTexel);  // tile -> the receiver that last listed it
+    const uint32_t end = uint32_t(std::min(nc, (item + 1) * per_item));
+    for (uint32_t c = uint32_t(item * per_item); c < end; ++c) {
+      const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
+      uint32_t rec = op.crossing_offset[c];
+      for (int k = 0; k < op.rays; ++k) {
+        const uint32_t cls = class_of(k);
+        auto add = [&](uint32_t coarse) {
+          if (coarse == kNoTexel) return;
+          const uint32_t t = op.tile_of[coarse];
+          if (seen[t] == c) return;
+          seen[t] = c;
+          emit(c, t * kLevels + cls);
+        };
+        add(hits[k]);
+        for (; rec < op.crossing_offset[c + 1] && int(op.crossings[rec].ray) == k; ++rec) {
+          const Crossing& cr = op.crossings[rec];
+          for (uint32_t j = cr.first; j < cr.first + cr.count; ++j) add(op.crossing_hits[j].coarse);
+        }
+      }
+    }
+  };
+  // A counting sort by key in two walks (no list of every pair held): count per item and key,
+  // then write each item's receivers after the earlier items' of the same key.
+  const size_t n_keys = n_tiles * kLevels;
+  std::vector<uint32_t> at(kItems * n_keys, 0);
+  parallel_for(int(kItems), threads, [&](int item) {
+    uint32_t* count = at.data() + size_t(item) * n_keys;
+    walk(size_t(item), [&](uint32_t, uint32_t key) { ++count[key]; });
+  });
+  GatherReach r;
+  r.offset.assign(n_keys + 1, 0);
+  uint32_t total = 0;
+  for (size_t key = 0; key < n_keys; ++key) {
+    r.offset[key] = total;
+    for (size_t item = 0; item < kItems; ++item) {
+      const uint32_t n = at[item * n_keys + key];
+      at[item * n_keys + key] = total;
+      total += n;
+    }
+  }
+  r.offset[n_keys] = total;
+  r.receivers.resize(total);
+  parallel_for(int(kItems), threads, [&](int item) {
+    uint32_t* next = at.data() + size_t(item) * n_keys;
+    walk(size_t(item), [&](uint32_t c, uint32_t key) { r.receivers[next[key]++] = c; });
+  });
+  return r;
+}
 
 CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const FloatImage& d) {
   const size_t ch = size_t(d.channels);
@@ -191,7 +277,7 @@ CoarseMap Bounces::total() const {
 
 Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const CoarseMap& source, const SolveOptions& options, SolveStats* stats) {
-  const std::vector<uint32_t> receivers = receivers_of(op, source, {});
+  const std::vector<uint32_t> receivers = receivers_of(op, source, options.reach, 0);
   CoarseMap first(source.size(), glm::vec3(0.0f));
   gather_into(op, present, source, receivers, options.threads, 0, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
@@ -223,7 +309,7 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
   CoarseMap first(nc, glm::vec3(0.0f));
   // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
   // on an object included: their tiles are among each tile's sources).
-  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, {});
+  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, options.reach, 0);
   gather_into(op, present, direct_change, receivers, options.threads, 0, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
   for (uint32_t c : crossing) {
@@ -291,18 +377,21 @@ float near_field_sigma(int rays) {
   return std::max(kNearFieldSigma, 1.0f / std::sqrt(float(std::max(rays, 1))));
 }
 
-void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vector<float>* near,
-             float near_sigma) {
-  levels = std::min(levels, CoarseGrid::kLinkSteps);
-  if (levels <= 0 || map.empty()) return;
+DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::vector<float>* near,
+                               float near_sigma) {
+  DenoiseWeights dw;
+  dw.levels = std::max(0, std::min(levels, CoarseGrid::kLinkSteps));
   const size_t nc = grid.size();
+  if (dw.levels == 0 || nc == 0) return dw;
+  constexpr size_t kTaps = DenoiseWeights::kTaps;
+  dw.weight.assign(size_t(dw.levels) * nc * kTaps, 0.0f);
+  dw.total.assign(size_t(dw.levels) * nc, 0.0f);
   const float spacing = coarse_spacing(grid);
   constexpr float kKernel[3] = {0.25f, 0.5f, 0.25f};
-  CoarseMap out(nc);
-  for (int level = 0; level < levels; ++level) {
+  for (int level = 0; level < dw.levels; ++level) {
     const float sigma = float(1 << level) * spacing;
     for (uint32_t c = 0; c < nc; ++c) {
-      glm::vec3 sum(0.0f);
+      const size_t at = size_t(level) * nc + c;
       float wsum = 0.0f;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
@@ -316,14 +405,44 @@ void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vect
             const float dn = ((*near)[c] - (*near)[q]) / near_sigma;
             w *= std::exp(-dn * dn);
           }
-          sum += w * map[q];
+          dw.weight[at * kTaps + size_t((dy + 1) * 3 + dx + 1)] = w;
           wsum += w;
         }
       }
+      dw.total[at] = wsum;
+    }
+  }
+  return dw;
+}
+
+void denoise(const CoarseGrid& grid, const DenoiseWeights& weights, CoarseMap& map) {
+  if (weights.levels <= 0 || map.empty()) return;
+  const size_t nc = map.size();
+  constexpr size_t kTaps = DenoiseWeights::kTaps;
+  CoarseMap out(nc);
+  for (int level = 0; level < weights.levels; ++level) {
+    for (uint32_t c = 0; c < nc; ++c) {
+      const size_t at = size_t(level) * nc + c;
+      const float* w = weights.weight.data() + at * kTaps;
+      glm::vec3 sum(0.0f);
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const uint32_t q = dx == 0 && dy == 0 ? c : grid.link(c, level, dx, dy);
+          if (q == kNoTexel || !grid.alive[q]) continue;
+          sum += w[(dy + 1) * 3 + dx + 1] * map[q];
+        }
+      }
+      const float wsum = weights.total[at];
       out[c] = wsum > 0.0f ? sum / wsum : map[c];
     }
     map.swap(out);
   }
+}
+
+void denoise(const CoarseGrid& grid, int levels, CoarseMap& map, const std::vector<float>* near,
+             float near_sigma) {
+  if (levels <= 0 || map.empty()) return;
+  denoise(grid, denoise_weights(grid, levels, near, near_sigma), map);
 }
 
 FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,

@@ -19,12 +19,24 @@ namespace lightpatch::cooker {
 // Irradiance (or radiance source) per coarse texel, RGB.
 using CoarseMap = std::vector<glm::vec3>;
 
+// Per tile (GatherOperator::kTile), the receivers whose rays reach it, static or object hits,
+// grouped by the shallowest level that leaves out their first ray there, so that a level's
+// receivers of a tile are a prefix. A gather visits the receivers listed under the tiles that
+// have light: finer than GatherOperator::sources, which answers for a whole tile of receivers;
+// any other receiver's sum is exactly 0. Derived from the operator alone.
+struct GatherReach {
+  std::vector<uint32_t> offset;     // [tile * kLevels + class] -> into `receivers`
+  std::vector<uint32_t> receivers;  // ascending within each (tile, class)
+};
+GatherReach gather_reach(const GatherOperator& op, int threads);
+
 struct SolveOptions {
   // Bounce terms below this (irradiance, the map's units) are dropped: the series stops when a
   // bounce adds less everywhere. A fraction of the group's significance threshold.
   float tolerance = 0.0f;
   int max_bounces = 256;
   int threads = 1;
+  const GatherReach* reach = nullptr;  // gather_reach(op): visit fewer receivers; null: tiles only
 };
 
 struct SolveStats {
@@ -111,6 +123,19 @@ std::vector<float> near_field(const GatherOperator& op);
 // filtering.
 void denoise(const CoarseGrid& grid, int levels, CoarseMap& map,
              const std::vector<float>* near = nullptr, float near_sigma = kNearFieldSigma);
+
+// denoise()'s weights, which depend on the grid only: computed once, they filter every map of
+// a cook the same, bit for bit, without the exponentials each time.
+struct DenoiseWeights {
+  static constexpr int kTaps = 9;  // 3 x 3
+  int levels = 0;
+  std::vector<float> weight;  // [level][coarse texel][kTaps], row by row from (-1, -1)
+  std::vector<float> total;   // [level][coarse texel]: the sum of its weights
+};
+DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels,
+                               const std::vector<float>* near = nullptr,
+                               float near_sigma = kNearFieldSigma);
+void denoise(const CoarseGrid& grid, const DenoiseWeights& weights, CoarseMap& map);
 
 // Adds the coarse map, magnified bilinearly within each chart, to `fine` (3 channels), scaled.
 void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
