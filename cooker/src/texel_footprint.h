@@ -1,7 +1,8 @@
 // What a light-map texel stands for: the patch of surface its light-map square covers, not only its
 // sample point. Direct light is integrated over it (a shadow edge thinner than a texel comes out
-// as the grey it covers, not as dots where it happens to cross texel centres), by the cook and the
-// reference path tracer alike, so both define a texel's irradiance the same way.
+// as the grey it covers, not as dots where it happens to cross texel centres) and the cook's
+// gather rays leave from it, as the reference path tracer's paths do, so both define a texel's
+// irradiance the same way.
 #pragma once
 
 #include <glm/glm.hpp>
