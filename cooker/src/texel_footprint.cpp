@@ -78,10 +78,7 @@ std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Trace
           const float b = f.b0 + (float(j) + 0.5f) / kFootprintCells * (f.b1 - f.b0);
           const glm::vec3 d = f.u * a + f.v * b;
           const float len = glm::length(d);
-          bool closed = false;
-          if (len > eps) {
-            closed = tracer->intersect(origin, d / len, 0.0f, len, false).hit;
-          }
+          const bool closed = len > eps && tracer->intersect(origin, d / len, 0.0f, len, false).hit;
           if (!closed) open |= uint16_t(1u << (i + kFootprintCells * j));
         }
       }

@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
 
 #include "lightpatch/cooker/error.h"
@@ -592,7 +593,9 @@ class EmbreeTracer final : public Tracer {
   void count_ray() const { count_rays(1); }
   // Each thread counts in a counter of its own, by a plain load and store: a locked add on a
   // shared one cost a single-ray query a tenth of its time. A thread's first query on this
-  // tracer registers its counter; rays_traced() sums them.
+  // tracer registers its counter; rays_traced() sums them. parallel_for() starts new threads on
+  // every call, so a counter goes to the next thread given the same id (one that has ended: ids
+  // are unique among live threads), and the counters stay about as many as threads at once.
   void count_rays(uint64_t k) const {
     struct Mine {
       uint64_t tracer = 0;  // id_ of the tracer `counter` belongs to
@@ -601,7 +604,9 @@ class EmbreeTracer final : public Tracer {
     thread_local Mine mine;
     if (mine.tracer != id_) {
       std::lock_guard<std::mutex> lock(counters_mutex_);
-      mine = {id_, &counters_.emplace_back().value};
+      std::atomic<uint64_t>*& counter = counter_of_thread_[std::this_thread::get_id()];
+      if (!counter) counter = &counters_.emplace_back().value;
+      mine = {id_, counter};
     }
     mine.counter->store(mine.counter->load(std::memory_order_relaxed) + k,
                         std::memory_order_relaxed);
@@ -624,7 +629,8 @@ class EmbreeTracer final : public Tracer {
   std::vector<const float*> vertices_;  // Embree-owned buffers, alive with the scene
   std::vector<const uint32_t*> indices_;
   const uint64_t id_ = next_id();         // never reused, unlike an address
-  mutable std::deque<Counter> counters_;  // one per thread that queried; never moved
+  mutable std::deque<Counter> counters_;  // one per thread id that queried; never moved
+  mutable std::unordered_map<std::thread::id, std::atomic<uint64_t>*> counter_of_thread_;
   mutable std::mutex counters_mutex_;
   std::mutex error_mutex_;
   std::string error_;
