@@ -253,13 +253,22 @@ scenegen::SceneBuilder small_room_with_uv1() {
   return room_of(floor, pillar, crate, 0.0f);
 }
 
-scenegen::SceneBuilder thin_panel_room() {
+namespace {
+// The closed 4 x 2.5 x 4 m plaster room of the bounce-light test scenes; returns its wood material.
+int plaster_room(scenegen::SceneBuilder& b) {
   using namespace scenegen;
-  SceneBuilder b;
   const int plaster = b.add_material({.name = "plaster", .base_color = {0.7f, 0.7f, 0.7f, 1.0f}});
   const int wood = b.add_material({.name = "wood", .base_color = {0.55f, 0.38f, 0.22f, 1.0f}});
   b.add_mesh_node("room", make_box({-2.0f, 0.0f, -2.0f}, {2.0f, 2.5f, 2.0f}, Facing::kInward),
                   plaster);
+  return wood;
+}
+}  // namespace
+
+scenegen::SceneBuilder thin_panel_room() {
+  using namespace scenegen;
+  SceneBuilder b;
+  const int wood = plaster_room(b);
   b.add_mesh_node("panel", make_box({1.93f, 0.0f, -0.6f}, {1.95f, 1.3f, 0.6f}), wood, {},
                   /*semi_dynamic=*/true);
   b.add_light_node(
@@ -273,6 +282,20 @@ scenegen::SceneBuilder thin_panel_room() {
                     .inner_cone_angle = 0.3f,
                     .outer_cone_angle = 0.45f},
                    {0.0f, 2.45f, 0.0f}, {0.0f, -1.0f, 0.0f});
+  return b;
+}
+
+scenegen::SceneBuilder low_slab_room() {
+  using namespace scenegen;
+  SceneBuilder b;
+  const int wood = plaster_room(b);
+  b.add_mesh_node("slab", make_box({-0.3f, 0.015f, -0.3f}, {0.3f, 0.05f, 0.3f}), wood);
+  b.add_light_node("candle",
+                   {.name = "candle",
+                    .type = LightType::kPoint,
+                    .color = {1.0f, 0.8f, 0.55f},
+                    .intensity = 2.0f},
+                   {0.42f, 0.08f, 0.0f}, {0, -1, 0}, /*semi_dynamic=*/true, /*light_radius=*/0.01f);
   return b;
 }
 

@@ -80,4 +80,13 @@ scenegen::SceneBuilder small_room_with_uv1();
 // are left to the cooker's unwrap.
 scenegen::SceneBuilder thin_panel_room();
 
+// A face just above a partly lit floor (the small inn's worst texels: faces a few centimetres
+// from a candle's lit surroundings): the same closed room, a static wooden slab ("slab", 60 x 60 x
+// 3.5 cm) hovering 1.5 cm above the floor, and a semi-dynamic candle ("candle", a point light of
+// 2 cd, radius 1 cm) 12 cm beside the slab and 8 cm above the floor. The floor is lit up to the
+// slab's edge and a few centimetres under it, and dark beyond; the slab's underside sees only that
+// floor, from 1.5 cm, so where its gather rays land decides its light. Big quads; light-map UVs
+// are left to the cooker's unwrap.
+scenegen::SceneBuilder low_slab_room();
+
 }  // namespace lightpatch::test

@@ -14,6 +14,7 @@
 #include "indirect_test_scenes.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/tracer.h"
+#include "texel_footprint.h"
 
 namespace lightpatch::cooker {
 namespace {
@@ -368,6 +369,76 @@ TEST(Indirect, ReachVisitsFewerReceiversAndGivesTheSameBits) {
                        solve_change(op, present, e, sparse, fast)));
     }
   }
+}
+
+// Near hits (gather.h NearHit): gather rays that land within two texels of where they leave
+// (the box room's corners) are listed with their points, and the first bounce reads their own
+// source there instead of the cache's value at the texel they land on: the correction is exactly
+// weight * (near - cache) on their receiver's first bounce, and none where they agree.
+TEST(Indirect, NearHitsReadTheirOwnSourceInTheFirstBounce) {
+  BoxRoom box;
+  const test::Prepared f = test::prepare(box.scene, 64);
+  const std::vector<TexelFootprint> footprints = texel_footprints(f.texels, f.tracer.get(), 2);
+  GatherOptions go;
+  go.rays = 64;
+  go.threads = 2;
+  GatherOperator op = build_gather(box.scene, f.layout, f.texels, *f.tracer, 2, go);
+  EXPECT_TRUE(op.near.empty());  // without footprints (one texel sample) there are none
+  go.footprints = &footprints;
+  op = build_gather(box.scene, f.layout, f.texels, *f.tracer, 2, go);
+  const size_t nc = op.grid.size();
+  ASSERT_EQ(op.near_offset.size(), nc + 1);
+  ASSERT_GT(op.near.size(), 0u);
+  EXPECT_LT(op.near.size(), op.hit.size() / 4);  // a few rays in the corners, not most
+  for (size_t c = 0; c < nc; ++c) {
+    for (uint32_t i = op.near_offset[c]; i < op.near_offset[c + 1]; ++i) {
+      const NearHit& h = op.near[i];
+      ASSERT_LT(h.ray, uint32_t(op.rays));
+      ASSERT_NE(op.hit[c * size_t(op.rays) + h.ray], kNoTexel);
+      // On the surface of the texel it lands on: within a few of its spacings.
+      const float spacing =
+          std::max(glm::length(footprints[h.fine].u), glm::length(footprints[h.fine].v));
+      EXPECT_LT(glm::length(h.point - f.texels.position[h.fine]), 4.0f * spacing);
+      EXPECT_GE(h.count, 1u);
+    }
+  }
+  CoarseMap source(nc);
+  for (size_t c = 0; c < nc; ++c) source[c] = glm::vec3(0.5f + 0.01f * float(c % 7), 0.3f, 0.1f);
+  // The near source equal to the cache's value at each hit: the same first bounce.
+  NearSource near(op.near.size());
+  std::vector<uint32_t> receiver(op.near.size());
+  for (size_t c = 0; c < nc; ++c)
+    for (uint32_t i = op.near_offset[c]; i < op.near_offset[c + 1]; ++i) {
+      near[i] = {i, source[op.hit[c * size_t(op.rays) + op.near[i].ray]]};
+      receiver[i] = uint32_t(c);
+    }
+  SolveOptions so;
+  so.tolerance = 1e-6f;
+  so.max_bounces = 4;
+  so.threads = 2;
+  const NearIndex index = near_index(op);
+  so.near = &index;
+  const Bounces plain = solve_indirect(op, {}, source, so);
+  const Bounces same = solve_indirect(op, {}, source, so, nullptr, &near);
+  for (size_t c = 0; c < nc; ++c)
+    EXPECT_NEAR(same.first[c].x, plain.first[c].x, 1e-5f * (1.0f + plain.first[c].x)) << c;
+  // One near hit sees 1 more than the cache: its receiver's first bounce gains its rays' weight.
+  const size_t pick = op.near.size() / 2;
+  near[pick].second += glm::vec3(1.0f);
+  const Bounces moved = solve_indirect(op, {}, source, so, nullptr, &near);
+  for (size_t c = 0; c < nc; ++c) {
+    const float expect = c == receiver[pick] ? op.weight[0][c] * float(op.near[pick].count) : 0.0f;
+    EXPECT_NEAR(moved.first[c].x - plain.first[c].x, expect, 1e-5f) << c;
+  }
+  // A change reads the near hits' change the same way.
+  const EmptyRadiance e = empty_radiance(op, source, plain);
+  const std::vector<uint8_t> none(box.scene.objects.size(), 0);
+  const CoarseMap zero(nc, glm::vec3(0.0f));
+  const NearSource near_change = {{uint32_t(pick), glm::vec3(2.0f)}};
+  const CoarseMap ch = solve_change(op, none, e, zero, so, nullptr, &near_change);
+  // The later bounces add little back to it.
+  const float w = op.weight[0][receiver[pick]] * float(op.near[pick].count);
+  EXPECT_NEAR(ch[receiver[pick]].x, 2.0f * w, 0.1f * w);
 }
 
 }  // namespace

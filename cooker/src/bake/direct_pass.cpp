@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
+#include "indirect/integrator.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -45,12 +47,22 @@ float peak_of(const FloatImage& map, const TexelSet& texels) {
   return peak;
 }
 
-DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand, int channels,
-                        Progress& progress) {
+namespace {
+
+// Shadow samples traced in one batch: enough for full packets from receivers of one sample a
+// light, few enough that the batch's object lists stay small.
+constexpr size_t kBatchSamples = 64;
+
+// The pass over a w x h image of receivers: valid(t), and their samples of a light
+// (light_samples(li, t, out)) and of the emissive surfaces (emissive_samples(t, out)); rows
+// for which skip_row(y) holds get none (their maps stay zero).
+template <typename Valid, typename LightSamples, typename EmissiveSamples, typename SkipRow>
+DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& cand, int channels,
+                           int w, int h, const Valid& valid, const LightSamples& light_samples,
+                           const EmissiveSamples& emissive_samples, const SkipRow& skip_row,
+                           Progress* progress) {
   const Scene& scene = b.scene;
-  const TexelSet& texels = b.texels;
   const Tracer& tracer = b.tracer;
-  const int w = texels.width, h = texels.height;
   DirectPass gm;
   gm.map = FloatImage(w, h, channels);
   gm.shadow.reserve(cand.sets.size());
@@ -59,80 +71,105 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
   const int max_objects = static_cast<int>(scene.objects.size());
   const size_t nc = cand.sets.size();
   parallel_for(h, b.threads, [&](int y) {
-    std::vector<LightSample> samples;
+    std::vector<LightSample> samples;  // of the receivers pending, traced together
     SampleRays batch;
+    // One light's samples of one receiver: samples[first, first + count), each carrying
+    // scale * its irradiance (per_channel: its irradiance as it is).
+    struct Chunk {
+      uint32_t first, count;
+      glm::vec3 scale;
+      bool per_channel;
+    };
+    std::vector<Chunk> chunks;
+    std::vector<std::pair<int, size_t>> pending;  // (x, its first chunk)
     std::vector<int> slots;
     std::vector<glm::vec3> s_acc(nc);
     std::vector<std::pair<std::pair<int, int>, glm::vec3>> p_acc;  // this texel's pair terms
     std::vector<std::pair<std::pair<int, int>, std::pair<int, glm::vec3>>> row_pairs;
     double doubly = 0.0, triply = 0.0;
-    for (int x = 0; x < w; ++x) {
-      const size_t t = texels.index(x, y);
-      if (!texels.valid[t]) continue;
-      glm::vec3 c_acc(0.0f);
-      bool any = false;  // some shadow accumulator touched
-      p_acc.clear();
-      // A segment carrying `e` and its answer: blocked by static geometry (n < 0), or crossing
-      // the n candidates `hit`.
-      auto segment = [&](int n, const int* hit, const glm::vec3& e) {
-        if (n < 0) return;
-        c_acc += e;
-        slots.clear();
-        for (int j = 0; j < n; ++j)
-          for (int sl : cand.slots_of[size_t(hit[size_t(j)])]) slots.push_back(sl);
-        for (int sl : slots) {
-          if (!any) std::fill(s_acc.begin(), s_acc.end(), glm::vec3(0.0f));
-          any = true;
-          s_acc[size_t(sl)] += e;
+    // The pending receivers' samples traced at once (a receiver of a few samples, a point of
+    // one a light, would trace packets of one ray), then each receiver's answers summed.
+    auto flush = [&]() {
+      batch.trace(tracer, samples, nc == 0 ? 0 : max_objects);
+      for (size_t r = 0; r < pending.size(); ++r) {
+        const int x = pending[r].first;
+        const size_t c_end = r + 1 < pending.size() ? pending[r + 1].second : chunks.size();
+        glm::vec3 c_acc(0.0f);
+        bool any = false;  // some shadow accumulator touched
+        p_acc.clear();
+        // A segment carrying `e` and its answer: blocked by static geometry (n < 0), or
+        // crossing the n candidates `hit`.
+        auto segment = [&](int n, const int* hit, const glm::vec3& e) {
+          if (n < 0) return;
+          c_acc += e;
+          slots.clear();
+          for (int j = 0; j < n; ++j)
+            for (int sl : cand.slots_of[size_t(hit[size_t(j)])]) slots.push_back(sl);
+          for (int sl : slots) {
+            if (!any) std::fill(s_acc.begin(), s_acc.end(), glm::vec3(0.0f));
+            any = true;
+            s_acc[size_t(sl)] += e;
+          }
+          if (slots.size() >= 2) {
+            std::sort(slots.begin(), slots.end());
+            for (size_t a = 0; a < slots.size(); ++a)
+              for (size_t c = a + 1; c < slots.size(); ++c) {
+                const std::pair<int, int> key(slots[a], slots[c]);
+                auto it = std::find_if(p_acc.begin(), p_acc.end(),
+                                       [&](const auto& v) { return v.first == key; });
+                if (it == p_acc.end())
+                  p_acc.push_back({key, e});
+                else
+                  it->second += e;
+              }
+            (slots.size() == 2 ? doubly : triply) += max3(e);
+          }
+        };
+        for (size_t k = pending[r].second; k < c_end; ++k) {
+          const Chunk& ck = chunks[k];
+          for (size_t i = ck.first; i < size_t(ck.first) + ck.count; ++i) {
+            const glm::vec3 e =
+                ck.per_channel ? samples[i].irradiance : ck.scale * samples[i].irradiance.x;
+            segment(batch.counts[i], batch.objects_of(i), e);
+          }
         }
-        if (slots.size() >= 2) {
-          std::sort(slots.begin(), slots.end());
-          for (size_t a = 0; a < slots.size(); ++a)
-            for (size_t c = a + 1; c < slots.size(); ++c) {
-              const std::pair<int, int> key(slots[a], slots[c]);
-              auto it = std::find_if(p_acc.begin(), p_acc.end(),
-                                     [&](const auto& v) { return v.first == key; });
-              if (it == p_acc.end())
-                p_acc.push_back({key, e});
-              else
-                it->second += e;
-            }
-          (slots.size() == 2 ? doubly : triply) += max3(e);
+        for (int ch = 0; ch < channels; ++ch) gm.map.at(x, y, ch) = c_acc[ch];
+        for (const auto& [key, e] : p_acc) row_pairs.push_back({key, {x, e}});
+        if (!any) continue;  // shadow maps start at zero: most texels touch none
+        for (size_t j = 0; j < nc; ++j) {
+          if (s_acc[j] == glm::vec3(0.0f)) continue;
+          float* row = gm.shadow[j].row(y) + size_t(x) * size_t(channels);
+          for (int ch = 0; ch < channels; ++ch) row[ch] = s_acc[j][ch];
         }
-      };
-      // One light's samples of this texel, traced together; `scale` gives each its energy.
-      auto trace = [&](const glm::vec3& scale, bool per_channel) {
-        batch.trace(tracer, samples, nc == 0 ? 0 : max_objects);
-        for (size_t i = 0; i < samples.size(); ++i) {
-          const glm::vec3 e = per_channel ? samples[i].irradiance : scale * samples[i].irradiance.x;
-          segment(batch.counts[i], batch.objects_of(i), e);
-        }
+      }
+      samples.clear();
+      chunks.clear();
+      pending.clear();
+    };
+    const int row_width = skip_row(y) ? 0 : w;
+    for (int x = 0; x < row_width; ++x) {
+      const size_t t = size_t(y) * size_t(w) + size_t(x);
+      if (!valid(t)) continue;
+      pending.push_back({x, chunks.size()});
+      auto add = [&](auto&& sample, const glm::vec3& scale, bool per_channel) {
+        const size_t first = samples.size();
+        sample();
+        chunks.push_back({uint32_t(first), uint32_t(samples.size() - first), scale, per_channel});
       };
       if (light < 0) {
         for (size_t l = 0; l < scene.lights.size(); ++l) {
           const Light& sl = scene.lights[l];
           if (sl.semi_dynamic) continue;
-          samples.clear();
-          b.light_samples(static_cast<int>(l), t, samples);
-          trace(sl.color * sl.intensity, false);
+          add([&] { light_samples(static_cast<int>(l), t, samples); }, sl.color * sl.intensity,
+              false);
         }
-        samples.clear();
-        b.emissive_samples(t, samples);
-        trace(glm::vec3(1.0f), true);
+        add([&] { emissive_samples(t, samples); }, glm::vec3(1.0f), true);
       } else {
-        samples.clear();
-        b.light_samples(light, t, samples);
-        trace(glm::vec3(1.0f), false);
+        add([&] { light_samples(light, t, samples); }, glm::vec3(1.0f), false);
       }
-      for (int ch = 0; ch < channels; ++ch) gm.map.at(x, y, ch) = c_acc[ch];
-      for (const auto& [key, e] : p_acc) row_pairs.push_back({key, {x, e}});
-      if (!any) continue;  // shadow maps start at zero: most texels touch none
-      for (size_t j = 0; j < nc; ++j) {
-        if (s_acc[j] == glm::vec3(0.0f)) continue;
-        float* r = gm.shadow[j].row(y) + size_t(x) * size_t(channels);
-        for (int ch = 0; ch < channels; ++ch) r[ch] = s_acc[j][ch];
-      }
+      if (samples.size() >= kBatchSamples) flush();
     }
+    if (!pending.empty()) flush();
     if (!row_pairs.empty() || doubly > 0.0 || triply > 0.0) {
       std::lock_guard<std::mutex> lock(pair_mutex);
       gm.doubly_blocked += doubly;
@@ -143,8 +180,40 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
         for (int ch = 0; ch < channels; ++ch) it->second.at(xe.first, y, ch) += xe.second[ch];
       }
     }
-    progress.advance();
+    if (progress) progress->advance();
   });
+  return gm;
+}
+
+}  // namespace
+
+DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand, int channels,
+                        Progress& progress) {
+  const TexelSet& texels = b.texels;
+  DirectPass gm = trace_receivers(
+      b, light, cand, channels, texels.width, texels.height,
+      [&](size_t t) { return texels.valid[t] != 0; },
+      [&](int li, size_t t, std::vector<LightSample>& out) { b.light_samples(li, t, out); },
+      [&](size_t t, std::vector<LightSample>& out) { b.emissive_samples(t, out); },
+      [](int) { return false; }, &progress);
+  const DirectPoints* pts = b.indirect ? b.indirect->direct_points() : nullptr;
+  if (pts && pts->size() > 0) {
+    // A light's early out (sample_punctual: below its cutoff) holds for a whole row of points
+    // beyond its reach: skipped, the row gets the zeros it would have had.
+    const float reach =
+        light >= 0 ? light_reach(b.scene.lights[size_t(light)], b.lights[size_t(light)].cutoff)
+                   : std::numeric_limits<float>::infinity();
+    const glm::vec3 centre = light >= 0 ? b.scene.lights[size_t(light)].position : glm::vec3(0.0f);
+    gm.points = std::make_unique<DirectPass>(trace_receivers(
+        b, light, cand, channels, pts->width, pts->height,
+        [&](size_t i) { return i < pts->size(); },
+        [&](int li, size_t i, std::vector<LightSample>& out) { b.point_light_samples(li, i, out); },
+        [&](size_t i, std::vector<LightSample>& out) { b.point_emissive_samples(i, out); },
+        [&](int y) {
+          return std::isfinite(reach) && pts->row_distance2(y, centre) > reach * reach;
+        },
+        nullptr));
+  }
   return gm;
 }
 

@@ -47,6 +47,10 @@ class SparseMap {
     return r ? r[(texel % size_t(width_)) * size_t(channels_) + size_t(channel)] : 0.0f;
   }
   bool row_written(int y) const { return rows_[size_t(y)] != nullptr; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // Row y's values (width() * channels()), or null where it was never written.
+  const float* row_data(int y) const { return rows_[size_t(y)].get(); }
   FloatImage dense() const;
 
  private:
@@ -60,6 +64,9 @@ struct DirectPass {
   std::map<std::pair<int, int>, FloatImage> pairs;  // slots a < b: light both block
   double doubly_blocked = 0.0;  // energy (max channel, summed over texels) blocked by 2 objects
   double triply_blocked = 0.0;  // ... by 3 or more
+  // The same at the integrator's DirectPoints (IndirectIntegrator::direct_points()), as images of
+  // its layout; null when it has none. Its slots are the same candidates'.
+  std::unique_ptr<DirectPass> points;
 };
 
 // Shadow samples of one texel and one light traced as a batch (Tracer::shadow_query_many): they
@@ -79,6 +86,7 @@ struct SampleRays {
 
 // light < 0: the static group (every static light at its authored colour and intensity, and the
 // emissive surfaces); otherwise scene light `light` at intensity 1, white. `channels`: 1 or 3.
+// The integrator's DirectPoints too, where it has them.
 DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand, int channels,
                         Progress& progress);
 

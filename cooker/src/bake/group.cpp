@@ -87,7 +87,8 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
   std::vector<std::string> only_reason(lg.bounce_only.size(), "the group's bounce light is off");
   if (ind) {
     const auto tb = std::chrono::steady_clock::now();
-    gb = ind->prepare(dp.map, lg.threshold);
+    DirectPass* points = dp.points.get();
+    gb = ind->prepare(dp.map, points ? &points->map : nullptr, lg.threshold);
     const float at = 0.5f * lg.threshold;
     bounce = !planned || gb.peak >= at;
     decide(DecisionKind::kGroupBounce, DecisionStage::kTraced, -1, -1, bounce,
@@ -104,9 +105,10 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
         std::vector<uint8_t> present(scene.objects.size(), 0);
         if (size_t(j) < cand.sets.size()) {
           for (int o : cand.sets[size_t(j)]) present[size_t(o)] = 1;
-          FineSum blocked;
+          FineSum blocked, blocked_points;
           blocked.sparse.push_back({&dp.shadow[size_t(j)], 1.0f});
-          change[size_t(j)] = ind->change(gb, present, blocked, lg.threshold);
+          if (points) blocked_points.sparse.push_back({&points->shadow[size_t(j)], 1.0f});
+          change[size_t(j)] = ind->change(gb, present, blocked, blocked_points, lg.threshold);
         } else {
           const size_t q = size_t(j) - cand.sets.size();
           present[size_t(lg.bounce_only[q])] = 1;
@@ -117,7 +119,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
                              " below a quarter output step (" + std::to_string(bar) + ")";
           } else {
             only_reason[q] = "first bounce of its change " + std::to_string(first);
-            only[q] = ind->change(gb, present, FineSum{}, lg.threshold);
+            only[q] = ind->change(gb, present, FineSum{}, FineSum{}, lg.threshold);
           }
         }
         seconds[size_t(j)] = seconds_since(tj);
@@ -211,11 +213,17 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
       // correction is change_a + change_b - change_ab (one object hides the other's bounce).
       std::vector<uint8_t> present(scene.objects.size(), 0);
       present[size_t(oa)] = present[size_t(ob)] = 1;
-      FineSum joint;
+      FineSum joint, joint_points;
       joint.sparse = {{&dp.shadow[size_t(key.first)], 1.0f},
                       {&dp.shadow[size_t(key.second)], 1.0f}};
       joint.dense = {{&pc.map, -1.0f}};
-      const BounceMap ab = ind->change(gb, present, joint, lg.threshold);
+      if (const DirectPass* points = dp.points.get()) {
+        joint_points.sparse = {{&points->shadow[size_t(key.first)], 1.0f},
+                               {&points->shadow[size_t(key.second)], 1.0f}};
+        auto it = points->pairs.find(key);
+        if (it != points->pairs.end()) joint_points.dense = {{&it->second, -1.0f}};
+      }
+      const BounceMap ab = ind->change(gb, present, joint, joint_points, lg.threshold);
       BounceMap p(ab.size());
       for (size_t c = 0; c < p.size(); ++c)
         p[c] = change[size_t(key.first)][c] + change[size_t(key.second)][c] - ab[c];

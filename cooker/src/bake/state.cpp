@@ -19,44 +19,60 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
   const ResolvedState resolved = resolve_state(scene, state);
   const std::vector<glm::vec3>& radiant = resolved.radiant;
   const std::vector<uint8_t>& visible = resolved.visible;
-  const int w = texels.width, h = texels.height;
-  FloatImage out(w, h, 3);
   const int max_objects = static_cast<int>(scene.objects.size());
-  progress.begin("bake state", static_cast<uint64_t>(h));
-  parallel_for(h, b.threads, [&](int y) {
-    std::vector<LightSample> samples;
-    SampleRays batch;  // traced as the groups' direct passes trace them
-    auto unblocked = [&](size_t i) {
-      const int n = batch.counts[i];
-      if (n < 0) return false;
-      const int* hit = batch.objects_of(i);
-      for (int j = 0; j < n; ++j)
-        if (visible[static_cast<size_t>(hit[j])]) return false;
-      return true;
-    };
-    for (int x = 0; x < w; ++x) {
-      const size_t t = texels.index(x, y);
-      if (!texels.valid[t]) continue;
-      glm::vec3 e(0.0f);
-      for (size_t li = 0; li < scene.lights.size(); ++li) {
-        if (max3(radiant[li]) <= 0.0f) continue;
+  // The state's direct light at every receiver of a w x h image (the light map, or the
+  // integrator's DirectPoints): valid(t), light_samples(li, t, out), emissive_samples(t, out).
+  auto direct = [&](int w, int h, const auto& valid, const auto& light_samples,
+                    const auto& emissive_samples, bool advance) {
+    FloatImage out(w, h, 3);
+    parallel_for(h, b.threads, [&](int y) {
+      std::vector<LightSample> samples;
+      SampleRays batch;  // traced as the groups' direct passes trace them
+      auto unblocked = [&](size_t i) {
+        const int n = batch.counts[i];
+        if (n < 0) return false;
+        const int* hit = batch.objects_of(i);
+        for (int j = 0; j < n; ++j)
+          if (visible[static_cast<size_t>(hit[j])]) return false;
+        return true;
+      };
+      for (int x = 0; x < w; ++x) {
+        const size_t t = size_t(y) * size_t(w) + size_t(x);
+        if (!valid(t)) continue;
+        glm::vec3 e(0.0f);
+        for (size_t li = 0; li < scene.lights.size(); ++li) {
+          if (max3(radiant[li]) <= 0.0f) continue;
+          samples.clear();
+          light_samples(static_cast<int>(li), t, samples);
+          batch.trace(b.tracer, samples, max_objects);
+          float sum = 0.0f;
+          for (size_t i = 0; i < samples.size(); ++i)
+            if (unblocked(i)) sum += samples[i].irradiance.x;
+          e += radiant[li] * sum;
+        }
         samples.clear();
-        b.light_samples(static_cast<int>(li), t, samples);
+        emissive_samples(t, samples);
         batch.trace(b.tracer, samples, max_objects);
-        float sum = 0.0f;
         for (size_t i = 0; i < samples.size(); ++i)
-          if (unblocked(i)) sum += samples[i].irradiance.x;
-        e += radiant[li] * sum;
+          if (unblocked(i)) e += samples[i].irradiance;
+        for (int c = 0; c < 3; ++c) out.at(x, y, c) = e[c];
       }
-      samples.clear();
-      b.emissive_samples(t, samples);
-      batch.trace(b.tracer, samples, max_objects);
-      for (size_t i = 0; i < samples.size(); ++i)
-        if (unblocked(i)) e += samples[i].irradiance;
-      for (int c = 0; c < 3; ++c) out.at(x, y, c) = e[c];
-    }
-    progress.advance();
-  });
+      if (advance) progress.advance();
+    });
+    return out;
+  };
+  progress.begin("bake state", static_cast<uint64_t>(texels.height));
+  FloatImage out = direct(
+      texels.width, texels.height, [&](size_t t) { return texels.valid[t] != 0; },
+      [&](int li, size_t t, std::vector<LightSample>& o) { b.light_samples(li, t, o); },
+      [&](size_t t, std::vector<LightSample>& o) { b.emissive_samples(t, o); }, true);
+  const DirectPoints* pts = b.indirect ? b.indirect->direct_points() : nullptr;
+  FloatImage at_points;
+  if (pts && pts->size() > 0)
+    at_points = direct(
+        pts->width, pts->height, [&](size_t i) { return i < pts->size(); },
+        [&](int li, size_t i, std::vector<LightSample>& o) { b.point_light_samples(li, i, o); },
+        [&](size_t i, std::vector<LightSample>& o) { b.point_emissive_samples(i, o); }, false);
   report.stage_time("bake.state", progress.end());
   if (b.indirect) {
     // The state's bounce light in one solve: every group's direct light at its state's colour
@@ -69,8 +85,9 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
       if (scene.lights[li].semi_dynamic && max3(radiant[li]) > 0.0f)
         threshold = std::min(threshold, b.lights[li].threshold * max3(radiant[li]));
     }
-    const FloatImage direct = out;
-    b.indirect->add_state(direct, visible, threshold, out);
+    const FloatImage direct_light = out;
+    b.indirect->add_state(direct_light, pts && pts->size() > 0 ? &at_points : nullptr, visible,
+                          threshold, out);
     report.stage_time("bake.state_bounce", progress.end());
   }
   report_bake(*impl_, report);

@@ -14,14 +14,14 @@ namespace lightpatch::cooker {
 static_assert(std::endian::native == std::endian::little, "the format is little-endian");
 // Every field of the operator is written below: a field added to gather.h must be added here
 // (and the version bumped), or a loaded operator would lack it.
-// (Sizes on 64-bit libstdc++: 3 ints and 12 vectors; the grid and 19 more fields.)
+// (Sizes on 64-bit libstdc++: 3 ints and 12 vectors; the grid and 21 more fields.)
 static_assert(sizeof(CoarseGrid) == 304, "CoarseGrid changed: update gather_file.cpp");
-static_assert(sizeof(GatherOperator) == 624, "GatherOperator changed: update gather_file.cpp");
+static_assert(sizeof(GatherOperator) == 672, "GatherOperator changed: update gather_file.cpp");
 
 namespace {
 
 constexpr char kMagic[8] = {'L', 'P', 'G', 'A', 'T', 'H', 'E', 'R'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 
 struct GatherScalars {
   int32_t level, width, height, rays, tiles_x, tiles_y;
@@ -213,6 +213,8 @@ std::vector<uint8_t> encode_gather(const GatherOperator& op, const std::array<ui
   w.array(op.crossings);
   w.array(op.crossing_hits);
   w.nested(op.coarse_crossing);
+  w.array(op.near_offset);
+  w.array(op.near);
   w.array(op.tile_of);
   w.nested(op.tile_coarse);
   w.nested(op.sources);
@@ -331,6 +333,15 @@ GatherOperator decode_gather(const uint8_t* data, size_t size, const GatherFileE
       throw CookError("gather file: index out of range in crossing_hits");
   }
   op.coarse_crossing = in.nested("coarse_crossing", e.objects, uint32_t(nc));
+  op.near_offset = in.array<uint32_t>("near_offset", nc + 1);
+  op.near = in.array<NearHit>("near");
+  check_offsets(op.near_offset, op.near.size(), "near_offset");
+  for (const NearHit& n : op.near) {
+    if (n.ray >= uint32_t(s.rays) || n.fine >= e.texels || n.count == 0 ||
+        n.count > uint32_t(s.rays) || !std::isfinite(n.point.x) || !std::isfinite(n.point.y) ||
+        !std::isfinite(n.point.z))
+      throw CookError("gather file: bad near hit");
+  }
   op.tile_of = in.array<uint32_t>("tile_of", nc);
   check_indices(op.tile_of, tiles, false, "tile_of");
   op.tile_coarse = in.nested("tile_coarse", tiles, uint32_t(nc));

@@ -14,7 +14,7 @@
 namespace lightpatch::cooker {
 
 // Bump when what a job's output depends on changes in a way the inputs below do not show.
-constexpr uint32_t kJobInputsVersion = 2;
+constexpr uint32_t kJobInputsVersion = 3;
 
 struct JobDigests {
   std::vector<Digest> groups;  // one per plan.groups entry

@@ -332,6 +332,8 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   std::vector<std::vector<Crossing>> row_crossings(size_t(g.height));
   std::vector<std::vector<CrossingHit>> row_hits(size_t(g.height));
   std::vector<std::vector<uint32_t>> row_counts(size_t(g.height));
+  // Near hits of each block row, with their coarse texel (kept in coarse and ray order).
+  std::vector<std::vector<std::pair<uint32_t, NearHit>>> row_near(size_t(g.height));
   // Texel sets made without a layout (tests) find hits by position.
   std::unique_ptr<TexelLocator> locator;
   std::vector<TexelSurface> surfaces;
@@ -350,6 +352,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
     std::vector<CrossingHit>& ch = row_hits[size_t(by)];
     std::vector<uint32_t>& counts = row_counts[size_t(by)];
+    std::vector<std::pair<uint32_t, NearHit>>& near = row_near[size_t(by)];
     std::vector<Ray> rays(static_cast<size_t>(n_rays));
     std::vector<Hit> first(static_cast<size_t>(n_rays));
     std::vector<uint32_t> under(static_cast<size_t>(n_rays), kNoTexel);
@@ -387,6 +390,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         float tmin = eps;
         Crossing rec{uint32_t(k), uint32_t(ch.size()), 0};
         uint32_t static_hit = kNoTexel;
+        float static_t = 0.0f;
         for (int guard = 0; guard <= kMaxCrossed * 2; ++guard) {
           // The first hit from the packet; after an object, the rest of the ray one at a time.
           const Hit h =
@@ -398,6 +402,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
           const int object = scene.meshes[size_t(h.mesh)].object;
           if (object < 0) {
             static_hit = to_fine(h, origin, dir, u);
+            static_t = h.t;
             break;
           }
           bool seen = false;
@@ -410,6 +415,17 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
           tmin = h.t + eps;
         }
         op.hit[size_t(c) * size_t(n_rays) + size_t(k)] = static_hit;
+        // A receiver on a mesh that stops no ray (a flame, a bulb) lends its light to no other
+        // texel, and no player sees it lit by bounce light: its rays keep the cache.
+        const int32_t from =
+            texels.mesh.empty() ? -1 : texels.mesh[g.members[m0 + uint32_t(k) % mc]];
+        if (options.footprints && rec.count == 0 && static_hit != kNoTexel &&
+            static_hit != kBackFace && (from < 0 || scene.meshes[size_t(from)].cast_shadows)) {
+          const TexelFootprint& f = (*options.footprints)[static_hit];
+          const float spacing = std::max(glm::length(f.u), glm::length(f.v));
+          if (static_t < kNearHitSpacings * spacing)
+            near.push_back({c, {origin + dir * static_t, uint32_t(k), static_hit, 1}});
+        }
         if (rec.count > 0) {
           cr.push_back(rec);
           ++crossings_here;
@@ -488,6 +504,44 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       op.grid.alive[c] = used[0] > 0 ? 1 : 0;
     }
   });
+  // Near rays that were dropped (a buried member's) or no longer land on a live texel go; of
+  // the rest, those of one coarse texel that land on one texel keep at most kNearPerTexel hits,
+  // spread over them in ray order, each standing for the rays up to the next.
+  op.near_offset.assign(nc + 1, 0);
+  {
+    const uint32_t per = uint32_t(kNearPerTexel);
+    std::vector<NearHit> live;
+    std::vector<uint32_t> order;
+    for (int by = 0; by < g.height; ++by) {
+      const std::vector<std::pair<uint32_t, NearHit>>& rn = row_near[size_t(by)];
+      for (size_t i = 0; i < rn.size();) {
+        const uint32_t c = rn[i].first;
+        live.clear();
+        for (; i < rn.size() && rn[i].first == c; ++i)
+          if (op.hit[size_t(c) * size_t(n_rays) + rn[i].second.ray] != kNoTexel)
+            live.push_back(rn[i].second);
+        order.resize(live.size());
+        std::iota(order.begin(), order.end(), 0u);
+        std::stable_sort(order.begin(), order.end(),
+                         [&](uint32_t a, uint32_t b) { return live[a].fine < live[b].fine; });
+        const size_t first = op.near.size();
+        for (size_t a = 0; a < order.size();) {
+          size_t b = a;
+          while (b < order.size() && live[order[b]].fine == live[order[a]].fine) ++b;
+          const uint32_t n = uint32_t(b - a), keep = std::min(n, per);
+          for (uint32_t j = 0; j < keep; ++j) {
+            const uint32_t lo = j * n / keep, hi = (j + 1) * n / keep;
+            NearHit h = live[order[a + lo]];
+            h.count = hi - lo;
+            op.near.push_back(h);
+          }
+          a = b;
+        }
+        op.near_offset[c + 1] = uint32_t(op.near.size() - first);
+      }
+    }
+  }
+  for (size_t c = 0; c < nc; ++c) op.near_offset[c + 1] += op.near_offset[c];
   for (uint8_t v : buried) op.buried_texels += v;
   {
     double sum = 0.0, count = 0.0;

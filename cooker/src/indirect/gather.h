@@ -101,6 +101,28 @@ struct CrossingHit {
   uint32_t coarse = kNoTexel;  // coarse texel hit on the object (kNoTexel: its back, or unmapped)
 };
 
+// Gather rays that land within kNearHitSpacings texel spacings (of the texel they land on) of
+// the surface they leave: a face a centimetre above a table, the floor at a wall's foot. The
+// radiance cache holds the mean of the texel they land on, but such rays land where the
+// receiver's own surroundings shape the light (the part of a candle-lit table under the face, in
+// its shadow): their first bounce reads the direct light at their hit points instead (solve.h),
+// one shadow ray per light each (the many hits of a texel average it). Only rays that cross no
+// semi-dynamic object before their hit are listed, so no state moves them. The rays of one coarse
+// texel that land on one texel keep at most kNearPerTexel hit points, spread over them in ray
+// order, each standing for `count` rays. Rays from a mesh that stops no ray (a flame, a bulb)
+// keep the cache: such a texel lends its light to no other.
+// Chosen on the small inn (docs/accuracy.md, section (e)): within 0.5 spacings the gain was lost,
+// 2 added nothing to 1; one point for all of a texel's hits (their centroid, or the first) lost
+// it too, 16 kept most of what every hit gave at a fraction of the points.
+constexpr float kNearHitSpacings = 1.0f;
+constexpr int kNearPerTexel = 16;
+struct NearHit {
+  glm::vec3 point{0.0f};     // where the first of its rays lands (static surface, world space)
+  uint32_t ray = 0;          // the first of its rays (index within its coarse texel's rays)
+  uint32_t fine = kNoTexel;  // the light-map texel they land on (its albedo and normal)
+  uint32_t count = 1;        // how many rays it stands for
+};
+
 struct GatherOptions {
   int rays = 256;  // per coarse texel
   uint64_t seed = 1;
@@ -134,6 +156,9 @@ struct GatherOperator {
   std::vector<Crossing> crossings;
   std::vector<CrossingHit> crossing_hits;
   std::vector<std::vector<uint32_t>> coarse_crossing;  // object -> coarse texels with a crossing
+  // Near hits (NearHit; only with GatherOptions::footprints), in coarse texel and ray order.
+  std::vector<uint32_t> near_offset;  // coarse -> [offset, next) into near
+  std::vector<NearHit> near;
   // Activity: receivers are grouped in tiles of kTile x kTile blocks; sources[t] lists the tiles
   // whose coarse texels tile t's rays can reach (static and object hits), so a gather of a sparse
   // source only visits the receivers that can see it.

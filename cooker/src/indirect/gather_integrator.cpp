@@ -1,7 +1,10 @@
 // The final-gathering integrator (gather.h, solve.h) behind IndirectIntegrator.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <limits>
 #include <mutex>
+#include <numeric>
 
 #include "indirect/gather.h"
 #include "indirect/integrator.h"
@@ -25,6 +28,48 @@ glm::vec3 FineSum::at(size_t texel) const {
 }
 
 namespace {
+
+// The near hits as DirectPoints, in the order of a Morton curve over their bounds (10 bits an
+// axis).
+DirectPoints direct_points_of(const GatherOperator& op, const TexelSet& texels) {
+  DirectPoints pts;
+  const size_t n = op.near.size();
+  pts.height = int((n + size_t(pts.width) - 1) / size_t(pts.width));
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (const NearHit& h : op.near) {
+    lo = glm::min(lo, h.point);
+    hi = glm::max(hi, h.point);
+  }
+  const glm::vec3 scale = 1023.0f / glm::max(hi - lo, glm::vec3(1e-6f));
+  auto spread = [](uint64_t v) {  // 10 bits to every third of 30
+    v = (v | (v << 16)) & 0x030000FFull;
+    v = (v | (v << 8)) & 0x0300F00Full;
+    v = (v | (v << 4)) & 0x030C30C3ull;
+    v = (v | (v << 2)) & 0x09249249ull;
+    return v;
+  };
+  std::vector<std::pair<uint64_t, uint32_t>> keyed(n);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::uvec3 q(glm::clamp((op.near[i].point - lo) * scale, 0.0f, 1023.0f));
+    keyed[i] = {(spread(q.x) << 2) | (spread(q.y) << 1) | spread(q.z), uint32_t(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  pts.position.resize(n);
+  pts.normal.resize(n);
+  pts.index.resize(n);
+  pts.row_lo.assign(size_t(pts.height), glm::vec3(std::numeric_limits<float>::max()));
+  pts.row_hi.assign(size_t(pts.height), glm::vec3(-std::numeric_limits<float>::max()));
+  for (size_t p = 0; p < n; ++p) {
+    const NearHit& h = op.near[keyed[p].second];
+    pts.index[p] = keyed[p].second;
+    pts.position[p] = h.point;
+    pts.normal[p] = texels.normal[h.fine];  // the shading normal where it lands
+    const size_t row = p / size_t(pts.width);
+    pts.row_lo[row] = glm::min(pts.row_lo[row], h.point);
+    pts.row_hi[row] = glm::max(pts.row_hi[row], h.point);
+  }
+  return pts;
+}
 
 // Bounce terms below this fraction of a group's significance threshold are dropped (the series
 // stops when a bounce adds less anywhere), scaled by 1 - the mean albedo: a series cut at a term
@@ -54,13 +99,20 @@ class GatherIntegrator final : public IndirectIntegrator {
     }
     const std::vector<float> near = near_field(op_);
     denoise_ = denoise_weights(op_.grid, preset_.denoise, &near, near_field_sigma(op_.rays));
+    points_ = direct_points_of(op_, b.texels);
+    near_ = near_index(op_);
   }
 
-  GroupBounce prepare(const FloatImage& direct, float threshold) const override {
+  const DirectPoints* direct_points() const override { return &points_; }
+
+  GroupBounce prepare(const FloatImage& direct, const PointLight* points,
+                      float threshold) const override {
     GroupBounce g;
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
+    const NearSource near = points ? near_source(*points) : NearSource{};
     SolveStats st;
-    const Bounces bounces = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st);
+    const Bounces bounces = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st,
+                                           points ? &near : nullptr);
     count(st, groups_);
     g.indirect = bounces.total();
     EmptyRadiance e = empty_radiance(op_, source, bounces);
@@ -71,13 +123,17 @@ class GatherIntegrator final : public IndirectIntegrator {
   }
 
   BounceMap change(const GroupBounce& group, const std::vector<uint8_t>& present,
-                   const FineSum& blocked, float threshold) const override {
+                   const FineSum& blocked, const FineSum& blocked_points,
+                   float threshold) const override {
     const CoarseMap src =
         blocked.sparse.empty() && blocked.dense.empty()
             ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
             : coarse_source_of(op_, b_.texels, [&](size_t t) { return blocked.at(t); });
+    const bool near = !blocked_points.sparse.empty() || !blocked_points.dense.empty();
+    const NearSource near_src = near ? near_source(blocked_points) : NearSource{};
     SolveStats st;
-    BounceMap change = solve_change(op_, present, empty(group), src, options(threshold, 1), &st);
+    BounceMap change = solve_change(op_, present, empty(group), src, options(threshold, 1), &st,
+                                    near ? &near_src : nullptr);
     count(st, changes_);
     return change;
   }
@@ -93,12 +149,16 @@ class GatherIntegrator final : public IndirectIntegrator {
     if (s > 1 && blocks) *blocks = block_image(op_.grid, b_.texels, s, map);
   }
 
-  void add_state(const FloatImage& direct, const std::vector<uint8_t>& present, float threshold,
+  void add_state(const FloatImage& direct, const PointLight* points,
+                 const std::vector<uint8_t>& present, float threshold,
                  FloatImage& fine) const override {
     const CoarseMap source = coarse_source(op_, b_.texels, direct);
+    const NearSource near = points ? near_source(*points) : NearSource{};
     SolveStats st;
-    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st).total(), fine,
-        nullptr);
+    add(solve_indirect(op_, present, source, options(threshold, b_.threads), &st,
+                       points ? &near : nullptr)
+            .total(),
+        fine, nullptr);
     count(st, states_);
   }
 
@@ -114,6 +174,7 @@ class GatherIntegrator final : public IndirectIntegrator {
         {"buried_texels", op_.buried_texels},
         {"gather_rays", op_.rays_traced},
         {"crossings", op_.crossings.size()},
+        {"near_hits", op_.near.size()},
         {"mean_albedo", op_.mean_albedo},
         {"solves",
          {{"groups", groups_.json()}, {"changes", changes_.json()}, {"states", states_.json()}}}};
@@ -122,12 +183,59 @@ class GatherIntegrator final : public IndirectIntegrator {
  private:
   static EmptyRadiance empty(const GroupBounce& g) { return {g.sends[0], g.sends[1], g.sends[2]}; }
 
+  // The near hits' first-bounce source (solve.h NearSource) of point light value(p) for the
+  // points p listed (ascending, each once): the albedo where each lands times it.
+  template <typename Value>
+  NearSource near_source_of(const std::vector<uint32_t>& listed, const Value& value) const {
+    NearSource out;
+    out.reserve(listed.size());
+    for (uint32_t p : listed) {
+      const glm::vec3 v = value(p);
+      if (v == glm::vec3(0.0f)) continue;
+      const uint32_t i = points_.index[p];
+      out.push_back({i, b_.texels.albedo[op_.near[i].fine] * v});
+    }
+    return out;
+  }
+  // From a point image (3 channels, or 1 for grey).
+  NearSource near_source(const PointLight& d) const {
+    const size_t ch = size_t(d.channels);
+    std::vector<uint32_t> all(points_.size());
+    std::iota(all.begin(), all.end(), 0u);
+    return near_source_of(all, [&](size_t p) {
+      const float* v = d.data.data() + p * ch;
+      return ch == 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]);
+    });
+  }
+  // From a sum of the passes' point maps: only the points its sparse maps wrote (an object's
+  // shadow covers few), every point of its dense ones.
+  NearSource near_source(const FineSum& sum) const {
+    std::vector<uint32_t> listed;
+    const uint32_t n = uint32_t(points_.size());
+    if (!sum.dense.empty()) {
+      listed.resize(n);
+      std::iota(listed.begin(), listed.end(), 0u);
+    } else {
+      for (const auto& [m, k] : sum.sparse)
+        for (int y = 0; y < m->height(); ++y) {
+          if (!m->row_written(y)) continue;
+          const uint32_t p0 = uint32_t(y) * uint32_t(m->width());
+          for (uint32_t p = p0; p < std::min(n, p0 + uint32_t(m->width())); ++p)
+            listed.push_back(p);
+        }
+      std::sort(listed.begin(), listed.end());
+      listed.erase(std::unique(listed.begin(), listed.end()), listed.end());
+    }
+    return near_source_of(listed, [&](size_t p) { return sum.at(p); });
+  }
+
   SolveOptions options(float threshold, int threads) const {
     SolveOptions so;
     so.tolerance = kBounceTolerance * threshold * (1.0f - op_.mean_albedo);
     so.max_bounces = 1024;
     so.threads = threads;
     so.reach = reach();
+    so.near = &near_;
     return so;
   }
 
@@ -167,6 +275,8 @@ class GatherIntegrator final : public IndirectIntegrator {
   mutable std::once_flag reach_once_;
   mutable std::atomic<bool> reach_built_{false};
   DenoiseWeights denoise_;  // guided by near_field(op_)
+  DirectPoints points_;     // op_.near's points
+  NearIndex near_;          // near_index(op_)
   mutable Tally groups_, changes_, states_;
 };
 

@@ -43,17 +43,45 @@ struct FineSum {
   glm::vec3 at(size_t texel) const;
 };
 
+// Points where an integrator's bounce light reads the direct light itself instead of its cache
+// (final gathering: its near hits, gather.h NearHit), as an image so that a direct pass traces
+// them as it traces the light map: point i is pixel i, row by row. They are in space order, so
+// that a row is a small piece of the scene and a light's pass skips the rows beyond its reach.
+struct DirectPoints {
+  static constexpr int kWidth = 256;
+  int width = kWidth, height = 0;
+  std::vector<glm::vec3> position, normal;  // one per point
+  std::vector<uint32_t> index;              // point -> the integrator's own entry
+  std::vector<glm::vec3> row_lo, row_hi;    // bounds of each row's points
+  size_t size() const { return position.size(); }
+  // Squared distance from p to row y's bounds.
+  float row_distance2(int y, const glm::vec3& p) const {
+    const glm::vec3 d = glm::max(glm::max(row_lo[size_t(y)] - p, p - row_hi[size_t(y)]), 0.0f);
+    return glm::dot(d, d);
+  }
+};
+
+// The direct light a pass or a state gives the DirectPoints, beside its light map.
+using PointLight = FloatImage;
+
 class IndirectIntegrator {
  public:
   virtual ~IndirectIntegrator() = default;
+  // The points whose direct light the group passes and states hand to prepare(), change() and
+  // add_state() (`points`), or null: none.
+  virtual const DirectPoints* direct_points() const { return nullptr; }
   // The bounce light of a group's direct light (fine, 1 or 3 channels, the group's units).
   // `threshold`: the group's significance (terms far below it are dropped).
-  virtual GroupBounce prepare(const FloatImage& direct, float threshold) const = 0;
+  // `points`: the same light at direct_points() (null when it has none).
+  virtual GroupBounce prepare(const FloatImage& direct, const PointLight* points,
+                              float threshold) const = 0;
   // What the objects `present` (one byte per Scene object) change in a prepared group's bounce
   // light: I(no object) - I(present), given the direct light they block. Single-threaded: the
   // caller runs changes in parallel.
+  // `blocked_points`: the same sum of the passes' point maps (empty without direct_points()).
   virtual BounceMap change(const GroupBounce& group, const std::vector<uint8_t>& present,
-                           const FineSum& blocked, float threshold) const = 0;
+                           const FineSum& blocked, const FineSum& blocked_points,
+                           float threshold) const = 0;
   // A cheap bound of the first bounce of change() for objects that block no direct light.
   virtual float first_change(const GroupBounce& group,
                              const std::vector<uint8_t>& present) const = 0;
@@ -64,10 +92,12 @@ class IndirectIntegrator {
   // may be negative where the indirect map's bilinear filter blends across a crease inside a
   // chart. Without one `blocks` is left as it is.
   virtual void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const = 0;
-  // A whole state's bounce light from its direct light (3 channels) with the objects `present`,
+  // A whole state's bounce light from its direct light (3 channels; `points` at direct_points(),
+  // null when it has none) with the objects `present`,
   // added to `fine` as add() does. `threshold`: the finest significance among the state's groups.
-  virtual void add_state(const FloatImage& direct, const std::vector<uint8_t>& present,
-                         float threshold, FloatImage& fine) const = 0;
+  virtual void add_state(const FloatImage& direct, const PointLight* points,
+                         const std::vector<uint8_t>& present, float threshold,
+                         FloatImage& fine) const = 0;
   // Settings and statistics for the report.
   virtual nlohmann::json describe() const = 0;
 };

@@ -118,6 +118,24 @@ void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
   });
 }
 
+// The near hits' first bounce: each reads `near` (its own point's source) instead of `src` at the
+// texel it lands on. Near rays cross no object, so `present` moves none of them.
+void add_near(const GatherOperator& op, const NearIndex& index, const CoarseMap& src,
+              const NearSource& near, CoarseMap& first) {
+  const std::vector<float>& weight = op.weight[0];
+  for (const auto& [i, v] : near) {
+    const uint32_t c = index.receiver[i];
+    first[c] += (weight[c] * float(op.near[i].count)) * v;
+  }
+  for (uint32_t h = 0; h + 1 < index.by_hit_offset.size(); ++h) {
+    if (src[h] == glm::vec3(0.0f)) continue;
+    for (uint32_t k = index.by_hit_offset[h]; k < index.by_hit_offset[h + 1]; ++k) {
+      const uint32_t i = index.by_hit[k], c = index.receiver[i];
+      first[c] -= (weight[c] * float(op.near[i].count)) * src[h];
+    }
+  }
+}
+
 // Drops terms below the tolerance; returns whether any is left.
 bool prune(CoarseMap& delta, float tolerance) {
   bool any = false;
@@ -269,6 +287,27 @@ CoarseMap coarse_source(const GatherOperator& op, const TexelSet& texels, const 
   });
 }
 
+NearIndex near_index(const GatherOperator& op) {
+  NearIndex x;
+  const size_t nc = op.grid.size(), n = op.near.size();
+  x.receiver.resize(n);
+  x.by_hit_offset.assign(nc + 1, 0);
+  auto hit_of = [&](uint32_t i) {
+    return op.hit[size_t(x.receiver[i]) * size_t(op.rays) + op.near[i].ray];
+  };
+  for (size_t c = 0; c < nc; ++c)
+    for (uint32_t i = op.near_offset[c]; i < op.near_offset[c + 1]; ++i)
+      x.receiver[i] = uint32_t(c);
+  for (uint32_t i = 0; i < n; ++i)
+    if (hit_of(i) != kNoTexel) ++x.by_hit_offset[hit_of(i) + 1];
+  for (size_t h = 0; h < nc; ++h) x.by_hit_offset[h + 1] += x.by_hit_offset[h];
+  x.by_hit.resize(x.by_hit_offset[nc]);
+  std::vector<uint32_t> next(x.by_hit_offset.begin(), x.by_hit_offset.end() - 1);
+  for (uint32_t i = 0; i < n; ++i)
+    if (hit_of(i) != kNoTexel) x.by_hit[next[hit_of(i)]++] = i;
+  return x;
+}
+
 CoarseMap Bounces::total() const {
   CoarseMap out(first.size());
   for (size_t c = 0; c < out.size(); ++c) out[c] = first[c] + second[c] + rest[c];
@@ -276,10 +315,12 @@ CoarseMap Bounces::total() const {
 }
 
 Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
-                       const CoarseMap& source, const SolveOptions& options, SolveStats* stats) {
+                       const CoarseMap& source, const SolveOptions& options, SolveStats* stats,
+                       const NearSource* near) {
   const std::vector<uint32_t> receivers = receivers_of(op, source, options.reach, 0);
   CoarseMap first(source.size(), glm::vec3(0.0f));
   gather_into(op, present, source, receivers, options.threads, 0, first);
+  if (near) add_near(op, *options.near, source, *near, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
   return run_series(op, present, std::move(first), nullptr, nullptr, options, stats);
 }
@@ -299,7 +340,8 @@ EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
 
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const EmptyRadiance& empty, const CoarseMap& direct_change,
-                       const SolveOptions& options, SolveStats* stats) {
+                       const SolveOptions& options, SolveStats* stats,
+                       const NearSource* near_change) {
   const size_t nc = op.grid.size();
   // Each term of I(present) reads through its rays what the previous term sends on; where a ray
   // now ends on an object, what the static hit sent in the empty series (the same term) is
@@ -311,6 +353,7 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
   // on an object included: their tiles are among each tile's sources).
   const std::vector<uint32_t> receivers = receivers_of(op, direct_change, options.reach, 0);
   gather_into(op, present, direct_change, receivers, options.threads, 0, first);
+  if (near_change) add_near(op, *options.near, direct_change, *near_change, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
   for (uint32_t c : crossing) {
     first[c] += crossing_change(op, present, empty.direct, 0, c);

@@ -30,6 +30,21 @@ struct GatherReach {
 };
 GatherReach gather_reach(const GatherOperator& op, int threads);
 
+// The near hits' first-bounce source (GatherOperator::near): (near hit index, the albedo where it
+// lands times the direct light there), each index at most once, in any order; those not listed
+// read 0.
+using NearSource = std::vector<std::pair<uint32_t, glm::vec3>>;
+
+// Derived from the operator for the near hits' sums, which then visit only the hits whose source
+// or cache value is not 0: each near hit's receiver, and the near hits by the coarse texel they
+// land on.
+struct NearIndex {
+  std::vector<uint32_t> receiver;       // near hit -> its coarse texel
+  std::vector<uint32_t> by_hit_offset;  // coarse texel -> [offset, next) into by_hit
+  std::vector<uint32_t> by_hit;         // near hits, by the coarse texel they land on
+};
+NearIndex near_index(const GatherOperator& op);
+
 struct SolveOptions {
   // Bounce terms below this (irradiance, the map's units) are dropped: the series stops when a
   // bounce adds less everywhere. A fraction of the group's significance threshold.
@@ -37,6 +52,7 @@ struct SolveOptions {
   int max_bounces = 256;
   int threads = 1;
   const GatherReach* reach = nullptr;  // gather_reach(op): visit fewer receivers; null: tiles only
+  const NearIndex* near = nullptr;     // near_index(op): required with a NearSource
 };
 
 struct SolveStats {
@@ -72,10 +88,11 @@ struct Bounces {
 };
 
 // Indirect irradiance with the objects `present` (one byte per Scene object; empty: none) in
-// place, the series of I = G_V (source + albedo * I) bounce by bounce.
+// place, the series of I = G_V (source + albedo * I) bounce by bounce. `near` (null: none) is
+// what the near hits' first bounce reads instead of `source` at their texel.
 Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const CoarseMap& source, const SolveOptions& options,
-                       SolveStats* stats = nullptr);
+                       SolveStats* stats = nullptr, const NearSource* near = nullptr);
 
 // What a group sends on with no object present, by the series term that reads it: its direct
 // light's radiance source (read by the first bounce), albedo * its first bounce (read by the
@@ -88,12 +105,13 @@ EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
 
 // What the objects `present` change in a group's indirect light, I(none) - I(present), given what
 // the group sends on with no object present and the radiance source of the direct light the
-// objects block (`direct_change`, from the fine change D(none) - D(present)). Term by term the
-// same series as solve_indirect's, so the change is exact to the terms each drops. Only the
-// receivers that can see a change are visited.
+// objects block (`direct_change`, from the fine change D(none) - D(present); `near_change` the
+// same at the near hits, or null). Term by term the same series as solve_indirect's, so the
+// change is exact to the terms each drops. Only the receivers that can see a change are visited.
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const EmptyRadiance& empty, const CoarseMap& direct_change,
-                       const SolveOptions& options, SolveStats* stats = nullptr);
+                       const SolveOptions& options, SolveStats* stats = nullptr,
+                       const NearSource* near_change = nullptr);
 
 // The largest first-order change that objects `present` make where they block no direct light:
 // per receiver, what its rays that now end on them saw before against what they see now. A cheap
