@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <set>
 #include <tuple>
 #include <utility>
 
@@ -66,31 +67,68 @@ std::vector<StoredPatch> whole_patches(const std::vector<SourcePatch>& patches) 
 }
 
 // A 3-channel patch takes channels 0-2 of its atlas texels; only 1-channel patches can use
-// channel 3, so a pack of mostly tinted patches leaves a quarter of its atlases empty. Tinted
-// patches of the groups without a light (B and the static shadows: drawn on a full rebuild, and
-// the static shadows on their object's toggle, never on a light change) are stored as three
-// 1-channel patches, largest first, while the 1-channel channel-texels still fit the alpha plane
-// under the 3-channel patches left. Each split texel costs two more texels drawn when its group
-// is drawn; the decoded values are the same bytes, so the recomposition is too.
-std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches) {
+// channel 3, so a pack of mostly tinted patches leaves up to a quarter of its atlases empty (the
+// inns at preview, bounce light tinted by the albedos: 10 % and 16 % of the atlas bytes with the
+// base patches alone split). Tinted patches are stored as three 1-channel patches (one map
+// channel each), largest first, while the 1-channel channel-texels still fit the alpha plane
+// under the 3-channel patches left:
+//  1. those of the groups without a light (B and the static shadows: drawn on a full rebuild, and
+//     the static shadows on their object's toggle, never on a light change);
+//  2. with `contributions_too`, then those of the light contributions C_l (drawn on a rebuild and
+//     on their light's change, never on an object's toggle), always from the light whose change
+//     draws the fewest texels so far, and never so that a light's change draws more texels than
+//     the costliest light change of the unsplit patches: the slowest change keeps its latency
+//     (one light: nothing split).
+// Each split texel costs two more texels drawn when its group is drawn; the decoded values are
+// the same bytes, so the recomposition is too.
+std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches,
+                                         bool contributions_too) {
+  auto texels = [&](size_t i) { return int64_t(patches[i].dest.w) * patches[i].dest.h; };
+  auto largest_first = [&](std::vector<size_t>& v) {
+    std::stable_sort(v.begin(), v.end(), [&](size_t a, size_t b) { return texels(a) > texels(b); });
+  };
   int64_t rgb = 0, grey = 0;  // texels of 3-channel patches, channel-texels of 1-channel ones
-  std::vector<size_t> candidates;
+  std::vector<size_t> unlit;  // tinted patches of groups without a light
+  std::map<int, std::vector<size_t>> contributions;  // tinted C_l patches by light
+  std::map<int, int64_t> change;                     // texels each light's change draws
   for (size_t i = 0; i < patches.size(); ++i) {
-    const int64_t t = int64_t(patches[i].dest.w) * patches[i].dest.h;
-    (patches[i].channels == 3 ? rgb : grey) += t;
-    if (patches[i].channels == 3 && !group_has_light(patches[i].kind)) candidates.push_back(i);
+    const SourcePatch& p = patches[i];
+    (p.channels == 3 ? rgb : grey) += texels(i);
+    if (group_has_light(p.kind)) change[p.light] += texels(i);
+    if (p.channels != 3) continue;
+    if (!group_has_light(p.kind))
+      unlit.push_back(i);
+    else if (p.kind == kGroupContribution && contributions_too)
+      contributions[p.light].push_back(i);
   }
-  std::stable_sort(candidates.begin(), candidates.end(), [&](size_t a, size_t b) {
-    return int64_t(patches[a].dest.w) * patches[a].dest.h >
-           int64_t(patches[b].dest.w) * patches[b].dest.h;
-  });
   std::vector<uint8_t> split(patches.size(), 0);
-  for (size_t i : candidates) {
-    const int64_t t = int64_t(patches[i].dest.w) * patches[i].dest.h;
-    if (grey + 3 * t > rgb - t) continue;  // a smaller one may still fit
+  auto try_split = [&](size_t i) {
+    const int64_t t = texels(i);
+    if (grey + 3 * t > rgb - t) return false;  // a smaller one may still fit
     grey += 3 * t;
     rgb -= t;
     split[i] = 1;
+    return true;
+  };
+  largest_first(unlit);
+  for (size_t i : unlit) try_split(i);
+  int64_t costliest = 0;
+  for (const auto& [light, texels_drawn] : change) costliest = std::max(costliest, texels_drawn);
+  // (texels the light's change draws, light): the cheapest light offers its next patch.
+  std::set<std::pair<int64_t, int>> queue;
+  std::map<int, size_t> next;
+  for (auto& [light, v] : contributions) {
+    largest_first(v);
+    queue.insert({change[light], light});
+  }
+  while (!queue.empty()) {
+    auto [cost, light] = *queue.begin();
+    queue.erase(queue.begin());
+    const std::vector<size_t>& v = contributions[light];
+    size_t& k = next[light];
+    const size_t i = v[k++];
+    if (cost + 2 * texels(i) <= costliest && try_split(i)) cost += 2 * texels(i);
+    if (k < v.size()) queue.insert({cost, light});
   }
   std::vector<StoredPatch> out;
   for (size_t i = 0; i < patches.size(); ++i) {
@@ -101,6 +139,23 @@ std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches
     for (int c = 0; c < 3; ++c) out.push_back({i, c});
   }
   return out;
+}
+
+// What the atlas packer places for the stored patches (a channel apart takes one channel).
+std::vector<PackItem> pack_items(const std::vector<SourcePatch>& patches,
+                                 const std::vector<StoredPatch>& stored) {
+  std::vector<PackItem> items(stored.size());
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const SourcePatch& p = patches[stored[i].source];
+    items[i] = PackItem{p.dest.w, p.dest.h, stored[i].destination >= 0 ? 1 : p.channels};
+  }
+  return items;
+}
+
+int64_t atlas_texels(const AtlasLayout& layout) {
+  int64_t t = 0;
+  for (const AtlasSize& a : layout.atlases) t += int64_t(a.width) * a.height;
+  return t;
 }
 
 nlohmann::json error_json(const EncodingError& e) {
@@ -542,9 +597,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     c.objects.push_back(r);
   }
 
-  // The stored patches: each source patch, or its three channels apart (see split_for_alpha).
-  const std::vector<StoredPatch> stored =
-      options.fill_alpha ? split_for_alpha(patches) : whole_patches(patches);
+  // The stored patches: each source patch, or its three channels apart (see split_for_alpha),
+  // and their atlas places. Contribution patches are split only where that takes fewer atlas
+  // texels than splitting the base and static-shadow patches alone: they cost drawing.
+  std::vector<StoredPatch> stored =
+      options.fill_alpha ? split_for_alpha(patches, false) : whole_patches(patches);
+  AtlasLayout atlas_layout = pack_atlases(pack_items(patches, stored), options.max_atlas_size);
+  if (options.fill_alpha) {
+    std::vector<StoredPatch> more = split_for_alpha(patches, true);
+    if (more.size() > stored.size()) {
+      AtlasLayout smaller = pack_atlases(pack_items(patches, more), options.max_atlas_size);
+      if (atlas_texels(smaller) < atlas_texels(atlas_layout)) {
+        stored = std::move(more);
+        atlas_layout = std::move(smaller);
+      }
+    }
+  }
 
   // Groups: consecutive patches with one owner (jobs are already in group order).
   for (size_t i = 0; i < stored.size(); ++i) {
@@ -561,12 +629,6 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   if (c.groups.size() > 0x10000u) throw CookError("more than 65536 patch groups");
 
   // Atlases.
-  std::vector<PackItem> items(stored.size());
-  for (size_t i = 0; i < stored.size(); ++i) {
-    const SourcePatch& p = patches[stored[i].source];
-    items[i] = PackItem{p.dest.w, p.dest.h, stored[i].destination >= 0 ? 1 : p.channels};
-  }
-  const AtlasLayout atlas_layout = pack_atlases(items, options.max_atlas_size);
   for (const AtlasSize& a : atlas_layout.atlases) {
     PackContents::Atlas atlas;
     atlas.width = uint32_t(a.width);
@@ -694,19 +756,28 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   nlohmann::json& j = report.root()["pack"];
   j["patches"] = stored.size();
   {
-    uint64_t split = 0, texels = 0;
+    uint64_t split = 0, texels = 0, lit = 0, lit_texels = 0;
     for (const StoredPatch& sp : stored) {
       if (sp.destination != 0) continue;
+      const SourcePatch& p = patches[sp.source];
+      const uint64_t t = uint64_t(p.dest.w) * uint64_t(p.dest.h);
       ++split;
-      texels += uint64_t(patches[sp.source].dest.w) * uint64_t(patches[sp.source].dest.h);
+      texels += t;
+      lit += group_has_light(p.kind) ? 1 : 0;
+      lit_texels += group_has_light(p.kind) ? t : 0;
     }
     j["split_for_alpha"] = {
         {"patches", split},
         {"texels", texels},
+        {"contribution_patches", lit},
+        {"contribution_texels", lit_texels},
         {"rule",
-         "tinted patches of the groups without a light (base, static shadows) stored as three "
-         "1-channel patches, largest first, while the 1-channel channel-texels fit the alpha "
-         "plane under the 3-channel ones; each split texel is drawn 3 times on a rebuild"}};
+         "tinted patches stored as three 1-channel patches, largest first, while the 1-channel "
+         "channel-texels fit the alpha plane under the 3-channel ones: first those of the groups "
+         "without a light (base, static shadows), then light contributions, from the light whose "
+         "change draws the fewest texels, never beyond the texels of the costliest light change "
+         "unsplit, and only where that takes fewer atlas texels; each split texel is drawn 3 "
+         "times when its group is drawn"}};
   }
   j["patches_by_kind"] = by_kind;
   j["negative_patches"] = negative;

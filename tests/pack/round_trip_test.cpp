@@ -76,6 +76,60 @@ void set_all(SceneState& st, const PackView& v, bool lights_on, bool objects_vis
   for (uint32_t o = 0; o < v.object_count(); ++o) st.set_object_visible(o, objects_visible);
 }
 
+uint64_t atlas_texels(const PackView& v) {
+  uint64_t t = 0;
+  for (uint32_t i = 0; i < v.atlas_count(); ++i)
+    t += uint64_t(v.atlas(i).width) * v.atlas(i).height;
+  return t;
+}
+
+// A synthetic scene packed with `po` (a: tinted patches split into the alpha plane where the
+// rules say so) and with fill_alpha off (b: no patch split).
+struct SplitAndWhole {
+  std::vector<uint8_t> split, whole;
+  Report report_split, report_whole;
+  PackView a, b;
+};
+
+void build_split_and_whole(const test::Synthetic& s, PackOptions po, SplitAndWhole& out) {
+  out.split = build_pack(s.scene, s.layout, s.maps, po, out.report_split);
+  po.fill_alpha = false;
+  out.whole = build_pack(s.scene, s.layout, s.maps, po, out.report_whole);
+  ASSERT_EQ(PackView::open(out.split.data(), out.split.size(), &out.a, nullptr), Status::kOk);
+  ASSERT_EQ(PackView::open(out.whole.data(), out.whole.size(), &out.b, nullptr), Status::kOk);
+}
+
+// Packs `a` and `b` of the same maps recompose every state to the same bits: rebuilds with all
+// lights on or off and all objects visible or hidden, then light changes through the incremental
+// path (recoloured, dimmed, switched off).
+void expect_same_recomposition(const PackView& a, const PackView& b) {
+  SceneState st;
+  CpuRecomposer ra, rb;
+  ASSERT_EQ(st.init(a, nullptr), Status::kOk);
+  ASSERT_EQ(ra.init(a, nullptr), Status::kOk);
+  ASSERT_EQ(rb.init(b, nullptr), Status::kOk);
+  const size_t n = size_t(ra.width()) * ra.height() * 3;
+  for (int state = 0; state < 4; ++state) {
+    set_all(st, a, (state & 1) != 0, (state & 2) != 0);
+    ASSERT_EQ(ra.rebuild(st), Status::kOk);
+    ASSERT_EQ(rb.rebuild(st), Status::kOk);
+    EXPECT_TRUE(std::equal(ra.rgb(), ra.rgb() + n, rb.rgb())) << "state " << state;
+  }
+  // Light changes through the incremental path: recoloured, dimmed, switched off.
+  for (uint32_t l = 0; l < a.light_count(); ++l) {
+    const float rgb[3] = {0.2f + 0.2f * float(l), 1.0f, 0.5f};
+    ASSERT_EQ(st.set_light_color(l, rgb), Status::kOk);
+    ASSERT_EQ(st.set_light_intensity(l, 0.5f + float(l)), Status::kOk);
+    ASSERT_EQ(ra.apply(st), Status::kOk);
+    ASSERT_EQ(rb.apply(st), Status::kOk);
+    EXPECT_TRUE(std::equal(ra.rgb(), ra.rgb() + n, rb.rgb())) << "light " << l;
+    ASSERT_EQ(st.set_light_on(l, false), Status::kOk);
+    ASSERT_EQ(ra.apply(st), Status::kOk);
+    ASSERT_EQ(rb.apply(st), Status::kOk);
+    EXPECT_TRUE(std::equal(ra.rgb(), ra.rgb() + n, rb.rgb())) << "light " << l << " off";
+  }
+}
+
 // Compares the recomposed map against `expected(x, y, c)` within bound + slack; returns the
 // largest error seen.
 template <typename F>
@@ -287,19 +341,9 @@ TEST(PackBuilder, SplittingTintedPatchesFillsTheAlphaPlaneAndRecomposesTheSame) 
   PackOptions po;
   po.keep_colour = true;
   po.tile_size = 8;  // base tiles small enough to split some
-  Report report_split, report_whole;
-  const std::vector<uint8_t> split = build_pack(s.scene, s.layout, s.maps, po, report_split);
-  po.fill_alpha = false;
-  const std::vector<uint8_t> whole = build_pack(s.scene, s.layout, s.maps, po, report_whole);
-  PackView a, b;
-  ASSERT_EQ(PackView::open(split.data(), split.size(), &a, nullptr), Status::kOk);
-  ASSERT_EQ(PackView::open(whole.data(), whole.size(), &b, nullptr), Status::kOk);
-  auto atlas_texels = [](const PackView& v) {
-    uint64_t t = 0;
-    for (uint32_t i = 0; i < v.atlas_count(); ++i)
-      t += uint64_t(v.atlas(i).width) * v.atlas(i).height;
-    return t;
-  };
+  SplitAndWhole packs;
+  ASSERT_NO_FATAL_FAILURE(build_split_and_whole(s, po, packs));
+  const PackView &a = packs.a, &b = packs.b;
   uint32_t one_channel_destinations = 0;
   for (uint32_t i = 0; i < a.patch_count(); ++i) {
     const int d = pack::patch_destination(a.patch(i).flags);
@@ -308,7 +352,8 @@ TEST(PackBuilder, SplittingTintedPatchesFillsTheAlphaPlaneAndRecomposesTheSame) 
     EXPECT_EQ(a.patch(i).channel_count, 1);
     EXPECT_FALSE(group_has_light(a.group(a.patch(i).group).kind));
   }
-  const int split_patches = report_split.root()["pack"]["split_for_alpha"]["patches"].get<int>();
+  const int split_patches =
+      packs.report_split.root()["pack"]["split_for_alpha"]["patches"].get<int>();
   std::printf("%d patches split, atlas texels %llu -> %llu\n", split_patches,
               static_cast<unsigned long long>(atlas_texels(b)),
               static_cast<unsigned long long>(atlas_texels(a)));
@@ -316,18 +361,85 @@ TEST(PackBuilder, SplittingTintedPatchesFillsTheAlphaPlaneAndRecomposesTheSame) 
   EXPECT_EQ(one_channel_destinations, 3u * uint32_t(split_patches));
   EXPECT_EQ(a.patch_count(), b.patch_count() + 2u * uint32_t(split_patches));
   EXPECT_LT(atlas_texels(a), atlas_texels(b));
-  SceneState st;
-  CpuRecomposer ra, rb;
-  ASSERT_EQ(st.init(a, nullptr), Status::kOk);
-  ASSERT_EQ(ra.init(a, nullptr), Status::kOk);
-  ASSERT_EQ(rb.init(b, nullptr), Status::kOk);
-  const size_t n = size_t(ra.width()) * ra.height() * 3;
-  for (int state = 0; state < 4; ++state) {
-    set_all(st, a, (state & 1) != 0, (state & 2) != 0);
-    ASSERT_EQ(ra.rebuild(st), Status::kOk);
-    ASSERT_EQ(rb.rebuild(st), Status::kOk);
-    EXPECT_TRUE(std::equal(ra.rgb(), ra.rgb() + n, rb.rgb())) << "state " << state;
+  expect_same_recomposition(a, b);
+}
+
+// Where tinted light contributions dominate (bounce light tinted by the albedos, as in the inns;
+// here 16 tinted lights, like the full inn's 17), the base map's split patches fill only part of
+// the alpha plane the 3-channel patches leave empty (15 % of the atlas bytes stayed empty when
+// only they were split). Contribution patches are split too, from the light whose change draws
+// the fewest texels, never beyond the costliest light change of the unsplit pack, where that
+// takes fewer atlas bytes (the committed small.lpk, whose patches are large against its atlas,
+// gains nothing and splits none). The atlases hold the patches with little waste and fewer
+// bytes, no light change draws more texels than the costliest one did, the shadows (drawn on
+// object toggles) stay whole, and every state, rebuilt or reached through light changes,
+// recomposes to the same bits as the pack without the split.
+TEST(PackBuilder, TintedContributionsFillTheAlphaPlaneWithinTheCostliestLightChange) {
+  test::SyntheticOptions o;
+  o.width = 96;
+  o.height = 80;
+  o.lights = 16;
+  o.tinted_lights = 16;
+  test::Synthetic s = test::make_synthetic(o);
+  PackOptions po;
+  po.keep_colour = true;
+  po.tile_size = 8;
+  SplitAndWhole packs;
+  ASSERT_NO_FATAL_FAILURE(build_split_and_whole(s, po, packs));
+  const PackView &a = packs.a, &b = packs.b;
+  auto atlas_bytes = [](const PackView& v) { return 4 * atlas_texels(v); };
+  auto patch_bytes = [](const PackView& v) {
+    uint64_t t = 0;
+    for (uint32_t i = 0; i < v.patch_count(); ++i)
+      t += uint64_t(v.patch(i).width) * v.patch(i).height * v.patch(i).channel_count;
+    return t;
+  };
+  // Texels drawn by the groups of a light (its change, every object visible).
+  auto light_change = [](const PackView& v, uint32_t light) {
+    uint64_t t = 0;
+    for (uint32_t i = 0; i < v.patch_count(); ++i) {
+      const pack::GroupRecord& g = v.group(v.patch(i).group);
+      if (group_has_light(g.kind) && g.light == light)
+        t += uint64_t(v.patch(i).width) * v.patch(i).height;
+    }
+    return t;
+  };
+  const double waste_split = 1.0 - double(patch_bytes(a)) / double(atlas_bytes(a));
+  const double waste_whole = 1.0 - double(patch_bytes(b)) / double(atlas_bytes(b));
+  int lit_split = 0;  // contribution patches stored a channel at a time
+  for (uint32_t i = 0; i < a.patch_count(); ++i) {
+    const uint16_t kind = a.group(a.patch(i).group).kind;
+    if (pack::patch_destination(a.patch(i).flags) == 0)
+      lit_split += kind == pack::kGroupContribution;
+    if (pack::patch_destination(a.patch(i).flags) >= 0) {
+      EXPECT_TRUE(kind == pack::kGroupContribution || !group_has_light(kind)) << "patch " << i;
+    }
   }
+  std::printf("%d contribution patches split; atlas bytes %llu -> %llu, waste %.1f %% -> %.1f %%\n",
+              lit_split, static_cast<unsigned long long>(atlas_bytes(b)),
+              static_cast<unsigned long long>(atlas_bytes(a)), 100.0 * waste_whole,
+              100.0 * waste_split);
+  EXPECT_GT(lit_split, 0);
+  EXPECT_LE(waste_split, 0.05);
+  EXPECT_LT(atlas_bytes(a), atlas_bytes(b));
+  EXPECT_EQ(patch_bytes(a), patch_bytes(b));
+  uint64_t costliest_split = 0, costliest_whole = 0;
+  bool some_light_pays_more = false;
+  for (uint32_t l = 0; l < a.light_count(); ++l) {
+    costliest_split = std::max(costliest_split, light_change(a, l));
+    costliest_whole = std::max(costliest_whole, light_change(b, l));
+    some_light_pays_more = some_light_pays_more || light_change(a, l) > light_change(b, l);
+  }
+  EXPECT_TRUE(some_light_pays_more);
+  EXPECT_EQ(costliest_split, costliest_whole);
+  ASSERT_EQ(a.group_count(), b.group_count());
+  for (uint32_t g = 0; g < a.group_count(); ++g) {
+    const uint16_t kind = a.group(g).kind;
+    if (kind == pack::kGroupShadow || kind == pack::kGroupPairCorrection) {
+      EXPECT_EQ(a.group(g).patch_count, b.group(g).patch_count) << "group " << g;
+    }
+  }
+  expect_same_recomposition(a, b);
 }
 
 // Atlas sides are multiples of 4, and the atlases come close to the fewest texels that can hold

@@ -108,9 +108,9 @@ Synthetic make_synthetic(const SyntheticOptions& o) {
   s.maps.output_step = base_max / 255.0f;
 
   // Contributions: an inverse-square blob per light, clipped to zero at a radius (the light's
-  // reach), inside every region; light 0 optionally tinted (3 channels).
+  // reach), inside every region; the first tinted_lights optionally tinted (3 channels).
   for (int i = 0; i < o.lights; ++i) {
-    const int ch = (i == 0 && o.three_channel_light) ? 3 : 1;
+    const int ch = (i < o.tinted_lights && o.three_channel_light) ? 3 : 1;
     FloatImage c(w, h, ch);
     const float cx = w * (0.2f + 0.6f * rng.next()), cy = h * (0.2f + 0.6f * rng.next());
     const float radius = 0.35f * float(std::min(w, h)) * (0.6f + 0.8f * rng.next());

@@ -17,6 +17,7 @@ struct SyntheticOptions {
   int lights = 3;
   int objects = 2;
   bool three_channel_light = true;  // light 0's C_l and S_0l have 3 channels (tinted bounce)
+  int tinted_lights = 1;  // with three_channel_light: lights 0 .. tinted_lights - 1 are tinted
   bool with_meshes = true;
   uint32_t seed = 1;
 };

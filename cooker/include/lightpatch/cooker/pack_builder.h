@@ -28,8 +28,9 @@ struct PackOptions {
   // Store every light group that has an indirect part split into its indirect-map and light-map
   // parts, whatever it costs (otherwise chosen per light group by atlas texels).
   bool always_split = false;
-  // Store tinted patches of the groups without a light as three 1-channel patches where the
-  // atlases' alpha planes have room for them (pack_builder.cpp, split_for_alpha).
+  // Store tinted patches as three 1-channel patches where the atlases' alpha planes have room for
+  // them: those of the groups without a light, then light contributions within the costliest
+  // light change and where that takes fewer atlas bytes (pack_builder.cpp, split_for_alpha).
   bool fill_alpha = true;
 };
 
