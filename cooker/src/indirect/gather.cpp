@@ -63,6 +63,48 @@ glm::vec3 cosine_dir(const glm::vec3& n, float u, float v) {
   return glm::normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z);
 }
 
+// Which of a coarse texel's mc members lie inside solid geometry: more than kBuriedFraction of
+// their rays (ray k leaves member k % mc) hit the back of a surface. `hits`: the n_rays raw hits
+// (fine texels, kBackFace). Out: buried[m], 0 or 1.
+void buried_members(const uint32_t* hits, int n_rays, uint32_t mc, std::vector<uint32_t>& back,
+                    std::vector<uint32_t>& total, std::vector<uint8_t>& buried) {
+  back.assign(mc, 0);
+  total.assign(mc, 0);
+  for (int k = 0; k < n_rays; ++k) {
+    ++total[uint32_t(k) % mc];
+    back[uint32_t(k) % mc] += hits[k] == kBackFace ? 1 : 0;
+  }
+  buried.assign(mc, 0);
+  for (uint32_t m = 0; m < mc; ++m)
+    buried[m] = float(back[m]) > kBuriedFraction * float(total[m]) ? 1 : 0;
+}
+
+// A coarse texel's near rays (in ray order), less those of buried members, as NearHits: those
+// that land on one texel keep at most kNearPerTexel points, spread over them in ray order, each
+// standing for the rays up to the next. Appended to `out` with the coarse texel c.
+void add_near_hits(uint32_t c, const std::vector<NearHit>& rays, const std::vector<uint8_t>& buried,
+                   uint32_t mc, std::vector<uint32_t>& order,
+                   std::vector<std::pair<uint32_t, NearHit>>& out) {
+  order.clear();
+  for (uint32_t i = 0; i < rays.size(); ++i)
+    if (!buried[rays[i].ray % mc]) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return rays[a].fine < rays[b].fine; });
+  const uint32_t per = uint32_t(kNearPerTexel);
+  for (size_t a = 0; a < order.size();) {
+    size_t b = a;
+    while (b < order.size() && rays[order[b]].fine == rays[order[a]].fine) ++b;
+    const uint32_t n = uint32_t(b - a), keep = std::min(n, per);
+    for (uint32_t j = 0; j < keep; ++j) {
+      const uint32_t lo = j * n / keep, hi = (j + 1) * n / keep;
+      NearHit h = rays[order[a + lo]];
+      h.count = hi - lo;
+      out.push_back({c, h});
+    }
+    a = b;
+  }
+}
+
 }  // namespace
 
 std::vector<TexelSurface> texel_surfaces(const TexelSet& texels) {
@@ -353,6 +395,9 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<CrossingHit>& ch = row_hits[size_t(by)];
     std::vector<uint32_t>& counts = row_counts[size_t(by)];
     std::vector<std::pair<uint32_t, NearHit>>& near = row_near[size_t(by)];
+    std::vector<NearHit> near_rays;  // this coarse texel's
+    std::vector<uint32_t> back, total, order;
+    std::vector<uint8_t> member_buried;
     std::vector<Ray> rays(static_cast<size_t>(n_rays));
     std::vector<Hit> first(static_cast<size_t>(n_rays));
     std::vector<uint32_t> under(static_cast<size_t>(n_rays), kNoTexel);
@@ -424,7 +469,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
           const TexelFootprint& f = (*options.footprints)[static_hit];
           const float spacing = std::max(glm::length(f.u), glm::length(f.v));
           if (static_t < kNearHitSpacings * spacing)
-            near.push_back({c, {origin + dir * static_t, uint32_t(k), static_hit, 1}});
+            near_rays.push_back({origin + dir * static_t, uint32_t(k), static_hit, 1});
         }
         if (rec.count > 0) {
           cr.push_back(rec);
@@ -432,22 +477,26 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         }
       }
       counts.push_back(crossings_here);
+      // Near rays merged now, while they are one texel's: kept ray by ray, production's ran to
+      // gigabytes on the full inn.
+      if (!near_rays.empty()) {
+        buried_members(op.hit.data() + size_t(c) * size_t(n_rays), n_rays, mc, back, total,
+                       member_buried);
+        add_near_hits(c, near_rays, member_buried, mc, order, near);
+        near_rays.clear();
+      }
     }
   });
   // Buried texels, then every hit as a coarse texel.
   std::vector<uint8_t> buried(texels.valid.size(), 0);
   parallel_for(int((nc + 255) / 256), options.threads, [&](int item) {
     std::vector<uint32_t> back, total;
+    std::vector<uint8_t> member_buried;
     for (size_t c = size_t(item) * 256; c < std::min(nc, size_t(item + 1) * 256); ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(uint32_t(c));
-      back.assign(mc, 0);
-      total.assign(mc, 0);
-      for (int k = 0; k < n_rays; ++k) {
-        ++total[uint32_t(k) % mc];
-        back[uint32_t(k) % mc] += op.hit[c * size_t(n_rays) + size_t(k)] == kBackFace ? 1 : 0;
-      }
+      buried_members(op.hit.data() + c * size_t(n_rays), n_rays, mc, back, total, member_buried);
       for (uint32_t m = 0; m < mc; ++m)
-        if (float(back[m]) > kBuriedFraction * float(total[m])) buried[g.members[m0 + m]] = 1;
+        if (member_buried[m]) buried[g.members[m0 + m]] = 1;
     }
   });
   // A hit on a buried texel moves to the nearest texel of the same surface that is not.
@@ -504,41 +553,13 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       op.grid.alive[c] = used[0] > 0 ? 1 : 0;
     }
   });
-  // Near rays that were dropped (a buried member's) or no longer land on a live texel go; of
-  // the rest, those of one coarse texel that land on one texel keep at most kNearPerTexel hits,
-  // spread over them in ray order, each standing for the rays up to the next.
+  // Near hits whose texel no longer resolves to a live one go (all of a hit's rays land on it).
   op.near_offset.assign(nc + 1, 0);
-  {
-    const uint32_t per = uint32_t(kNearPerTexel);
-    std::vector<NearHit> live;
-    std::vector<uint32_t> order;
-    for (int by = 0; by < g.height; ++by) {
-      const std::vector<std::pair<uint32_t, NearHit>>& rn = row_near[size_t(by)];
-      for (size_t i = 0; i < rn.size();) {
-        const uint32_t c = rn[i].first;
-        live.clear();
-        for (; i < rn.size() && rn[i].first == c; ++i)
-          if (op.hit[size_t(c) * size_t(n_rays) + rn[i].second.ray] != kNoTexel)
-            live.push_back(rn[i].second);
-        order.resize(live.size());
-        std::iota(order.begin(), order.end(), 0u);
-        std::stable_sort(order.begin(), order.end(),
-                         [&](uint32_t a, uint32_t b) { return live[a].fine < live[b].fine; });
-        const size_t first = op.near.size();
-        for (size_t a = 0; a < order.size();) {
-          size_t b = a;
-          while (b < order.size() && live[order[b]].fine == live[order[a]].fine) ++b;
-          const uint32_t n = uint32_t(b - a), keep = std::min(n, per);
-          for (uint32_t j = 0; j < keep; ++j) {
-            const uint32_t lo = j * n / keep, hi = (j + 1) * n / keep;
-            NearHit h = live[order[a + lo]];
-            h.count = hi - lo;
-            op.near.push_back(h);
-          }
-          a = b;
-        }
-        op.near_offset[c + 1] = uint32_t(op.near.size() - first);
-      }
+  for (int by = 0; by < g.height; ++by) {
+    for (const auto& [c, h] : row_near[size_t(by)]) {
+      if (op.hit[size_t(c) * size_t(n_rays) + h.ray] == kNoTexel) continue;
+      op.near.push_back(h);
+      ++op.near_offset[c + 1];
     }
   }
   for (size_t c = 0; c < nc; ++c) op.near_offset[c + 1] += op.near_offset[c];
