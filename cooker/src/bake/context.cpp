@@ -226,16 +226,16 @@ namespace {
 constexpr uint64_t kPointSalt = 0x706f696e74ull;  // "point"
 }  // namespace
 
-void BakeContext::point_light_samples(int li, size_t i, std::vector<LightSample>& out) const {
-  const DirectPoints& pts = *indirect->direct_points();
+void BakeContext::point_light_samples(const DirectPoints& pts, int li, size_t i,
+                                      std::vector<LightSample>& out) const {
   const LightPlan& p = lights[static_cast<size_t>(li)];
   sample_punctual(scene.lights[static_cast<size_t>(li)], pts.position[i], pts.normal[i], 1,
                   sample_hash(options.seed, i, static_cast<uint64_t>(li + 1), kPointSalt), eps,
                   extent, p.cutoff, out);
 }
 
-void BakeContext::point_emissive_samples(size_t i, std::vector<LightSample>& out) const {
-  const DirectPoints& pts = *indirect->direct_points();
+void BakeContext::point_emissive_samples(const DirectPoints& pts, size_t i,
+                                         std::vector<LightSample>& out) const {
   emissive.sample(pts.position[i], pts.normal[i], 1, sample_hash(options.seed, i, 0, kPointSalt),
                   eps, out);
 }

@@ -22,6 +22,7 @@
 namespace lightpatch::cooker {
 
 class IndirectIntegrator;
+struct DirectPoints;
 
 // A light's significance and sampling.
 struct LightPlan {
@@ -64,11 +65,14 @@ struct BakeContext {
   // Shadow samples of scene light `li` (intensity 1, white) at texel t.
   void light_samples(int li, size_t t, std::vector<LightSample>& out) const;
   void emissive_samples(size_t t, std::vector<LightSample>& out) const;
-  // The same for point i of the integrator's DirectPoints: a point, not a texel's patch, and one
-  // shadow ray per light (a sphere light: to its centre, with its exact unshadowed irradiance)
-  // and one emissive sample: each point stands for a few gather rays, which average them.
-  void point_light_samples(int li, size_t i, std::vector<LightSample>& out) const;
-  void point_emissive_samples(size_t i, std::vector<LightSample>& out) const;
+  // The same for point i of the integrator's DirectPoints `pts`: a point, not a texel's patch,
+  // and one shadow ray per light (a sphere light: to its centre, with its exact unshadowed
+  // irradiance) and one emissive sample: each point stands for a few gather rays, which average
+  // them.
+  void point_light_samples(const DirectPoints& pts, int li, size_t i,
+                           std::vector<LightSample>& out) const;
+  void point_emissive_samples(const DirectPoints& pts, size_t i,
+                              std::vector<LightSample>& out) const;
   std::string light_name(int li) const;
 };
 

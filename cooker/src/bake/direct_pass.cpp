@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <mutex>
 
 #include "indirect/integrator.h"
@@ -54,13 +53,11 @@ namespace {
 constexpr size_t kBatchSamples = 64;
 
 // The pass over a w x h image of receivers: valid(t), and their samples of a light
-// (light_samples(li, t, out)) and of the emissive surfaces (emissive_samples(t, out)); rows
-// for which skip_row(y) holds get none (their maps stay zero).
-template <typename Valid, typename LightSamples, typename EmissiveSamples, typename SkipRow>
+// (light_samples(li, t, out)) and of the emissive surfaces (emissive_samples(t, out)).
+template <typename Valid, typename LightSamples, typename EmissiveSamples>
 DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& cand, int channels,
                            int w, int h, const Valid& valid, const LightSamples& light_samples,
-                           const EmissiveSamples& emissive_samples, const SkipRow& skip_row,
-                           Progress* progress) {
+                           const EmissiveSamples& emissive_samples, Progress* progress) {
   const Scene& scene = b.scene;
   const Tracer& tracer = b.tracer;
   DirectPass gm;
@@ -146,8 +143,7 @@ DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& ca
       chunks.clear();
       pending.clear();
     };
-    const int row_width = skip_row(y) ? 0 : w;
-    for (int x = 0; x < row_width; ++x) {
+    for (int x = 0; x < w; ++x) {
       const size_t t = size_t(y) * size_t(w) + size_t(x);
       if (!valid(t)) continue;
       pending.push_back({x, chunks.size()});
@@ -194,24 +190,16 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
       b, light, cand, channels, texels.width, texels.height,
       [&](size_t t) { return texels.valid[t] != 0; },
       [&](int li, size_t t, std::vector<LightSample>& out) { b.light_samples(li, t, out); },
-      [&](size_t t, std::vector<LightSample>& out) { b.emissive_samples(t, out); },
-      [](int) { return false; }, &progress);
+      [&](size_t t, std::vector<LightSample>& out) { b.emissive_samples(t, out); }, &progress);
   const DirectPoints* pts = b.indirect ? b.indirect->direct_points() : nullptr;
   if (pts && pts->size() > 0) {
-    // A light's early out (sample_punctual: below its cutoff) holds for a whole row of points
-    // beyond its reach: skipped, the row gets the zeros it would have had.
-    const float reach =
-        light >= 0 ? light_reach(b.scene.lights[size_t(light)], b.lights[size_t(light)].cutoff)
-                   : std::numeric_limits<float>::infinity();
-    const glm::vec3 centre = light >= 0 ? b.scene.lights[size_t(light)].position : glm::vec3(0.0f);
     gm.points = std::make_unique<DirectPass>(trace_receivers(
         b, light, cand, channels, pts->width, pts->height,
         [&](size_t i) { return i < pts->size(); },
-        [&](int li, size_t i, std::vector<LightSample>& out) { b.point_light_samples(li, i, out); },
-        [&](size_t i, std::vector<LightSample>& out) { b.point_emissive_samples(i, out); },
-        [&](int y) {
-          return std::isfinite(reach) && pts->row_distance2(y, centre) > reach * reach;
+        [&](int li, size_t i, std::vector<LightSample>& out) {
+          b.point_light_samples(*pts, li, i, out);
         },
+        [&](size_t i, std::vector<LightSample>& out) { b.point_emissive_samples(*pts, i, out); },
         nullptr));
   }
   return gm;

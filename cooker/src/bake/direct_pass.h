@@ -49,8 +49,6 @@ class SparseMap {
   bool row_written(int y) const { return rows_[size_t(y)] != nullptr; }
   int width() const { return width_; }
   int height() const { return height_; }
-  // Row y's values (width() * channels()), or null where it was never written.
-  const float* row_data(int y) const { return rows_[size_t(y)].get(); }
   FloatImage dense() const;
 
  private:

@@ -71,8 +71,11 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
   if (pts && pts->size() > 0)
     at_points = direct(
         pts->width, pts->height, [&](size_t i) { return i < pts->size(); },
-        [&](int li, size_t i, std::vector<LightSample>& o) { b.point_light_samples(li, i, o); },
-        [&](size_t i, std::vector<LightSample>& o) { b.point_emissive_samples(i, o); }, false);
+        [&](int li, size_t i, std::vector<LightSample>& o) {
+          b.point_light_samples(*pts, li, i, o);
+        },
+        [&](size_t i, std::vector<LightSample>& o) { b.point_emissive_samples(*pts, i, o); },
+        false);
   report.stage_time("bake.state", progress.end());
   if (b.indirect) {
     // The state's bounce light in one solve: every group's direct light at its state's colour

@@ -462,13 +462,14 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         op.hit[size_t(c) * size_t(n_rays) + size_t(k)] = static_hit;
         // A receiver on a mesh that stops no ray (a flame, a bulb) lends its light to no other
         // texel, and no player sees it lit by bounce light: its rays keep the cache.
-        const int32_t from =
-            texels.mesh.empty() ? -1 : texels.mesh[g.members[m0 + uint32_t(k) % mc]];
         if (options.footprints && rec.count == 0 && static_hit != kNoTexel &&
-            static_hit != kBackFace && (from < 0 || scene.meshes[size_t(from)].cast_shadows)) {
+            static_hit != kBackFace) {
           const TexelFootprint& f = (*options.footprints)[static_hit];
           const float spacing = std::max(glm::length(f.u), glm::length(f.v));
-          if (static_t < kNearHitSpacings * spacing)
+          const int32_t from =
+              texels.mesh.empty() ? -1 : texels.mesh[g.members[m0 + uint32_t(k) % mc]];
+          if (static_t < kNearHitSpacings * spacing &&
+              (from < 0 || scene.meshes[size_t(from)].cast_shadows))
             near_rays.push_back({origin + dir * static_t, uint32_t(k), static_hit, 1});
         }
         if (rec.count > 0) {

@@ -57,16 +57,11 @@ DirectPoints direct_points_of(const GatherOperator& op, const TexelSet& texels) 
   pts.position.resize(n);
   pts.normal.resize(n);
   pts.index.resize(n);
-  pts.row_lo.assign(size_t(pts.height), glm::vec3(std::numeric_limits<float>::max()));
-  pts.row_hi.assign(size_t(pts.height), glm::vec3(-std::numeric_limits<float>::max()));
   for (size_t p = 0; p < n; ++p) {
     const NearHit& h = op.near[keyed[p].second];
     pts.index[p] = keyed[p].second;
     pts.position[p] = h.point;
     pts.normal[p] = texels.normal[h.fine];  // the shading normal where it lands
-    const size_t row = p / size_t(pts.width);
-    pts.row_lo[row] = glm::min(pts.row_lo[row], h.point);
-    pts.row_hi[row] = glm::max(pts.row_hi[row], h.point);
   }
   return pts;
 }

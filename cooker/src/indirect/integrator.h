@@ -46,19 +46,13 @@ struct FineSum {
 // Points where an integrator's bounce light reads the direct light itself instead of its cache
 // (final gathering: its near hits, gather.h NearHit), as an image so that a direct pass traces
 // them as it traces the light map: point i is pixel i, row by row. They are in space order, so
-// that a row is a small piece of the scene and a light's pass skips the rows beyond its reach.
+// that an object's shadow covers few rows of its sparse shadow map.
 struct DirectPoints {
   static constexpr int kWidth = 256;
   int width = kWidth, height = 0;
   std::vector<glm::vec3> position, normal;  // one per point
   std::vector<uint32_t> index;              // point -> the integrator's own entry
-  std::vector<glm::vec3> row_lo, row_hi;    // bounds of each row's points
   size_t size() const { return position.size(); }
-  // Squared distance from p to row y's bounds.
-  float row_distance2(int y, const glm::vec3& p) const {
-    const glm::vec3 d = glm::max(glm::max(row_lo[size_t(y)] - p, p - row_hi[size_t(y)]), 0.0f);
-    return glm::dot(d, d);
-  }
 };
 
 // The direct light a pass or a state gives the DirectPoints, beside its light map.
