@@ -196,6 +196,16 @@ float sphere_cosine_integral(float cos_theta, float sin2_sigma) {
   return std::max(0.0f, e);
 }
 
+namespace {
+// A sphere light's unshadowed irradiance at the receiver whose view of it `view` is, with normal
+// n: the horizon-clipped cone's cosine integral outside it, pi L inside.
+float sphere_irradiance(const SphereView& view, const glm::vec3& n) {
+  if (view.cos_max <= -1.0f) return view.radiance * kPi;
+  const float s2 = (view.radius / view.distance) * (view.radius / view.distance);
+  return view.radiance * sphere_cosine_integral(glm::dot(n, view.axis), s2);
+}
+}  // namespace
+
 bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n, int samples,
                      uint64_t rng, float eps, float extent, float cutoff,
                      std::vector<LightSample>& out, const TexelFootprint* footprint,
@@ -227,42 +237,69 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
   const size_t first = out.size();
   float total = 0.0f;
   if (r <= 0.0f || samples <= 1) {
-    // A point light, or a sphere with one sample: one ray per receiver point, towards the light's
-    // centre, carrying that point's exact unshadowed irradiance.
+    // A point light, or a sphere with one sample: one ray per receiver point, towards the light
+    // (a sphere: a random point of it), carrying that point's exact unshadowed irradiance.
     for (int i = 0; i < points; ++i) {
       const glm::vec3 q = receiver(i), origin = q + n * eps;
       float e = 0.0f;
       const glm::vec3 to_q = light.position - q;
       const float dq = glm::length(to_q);
+      SphereView view;
       if (r <= 0.0f) {
         e = irradiance_with_cone(light, cone, light.position, q, n, eps2);
       } else {
-        SphereView view;
         if (!view_sphere_light(light, q, &view)) continue;
-        const float cos_theta = dq > 0.0f ? glm::dot(n, to_q / dq) : 1.0f;
-        const float s2 = dq > r ? (r / dq) * (r / dq) : 1.0f;
-        e = dq > r ? view.radiance * sphere_cosine_integral(cos_theta, s2) : view.radiance * kPi;
+        e = sphere_irradiance(view, n);
       }
       e /= float(points);
       if (!(e > 0.0f)) continue;
       const glm::vec3 to_l = light.position - origin;
       const float dl = glm::length(to_l);
       if (r <= 0.0f && !(dl > 2.0f * eps)) continue;  // a point light on the surface: no ray
+      glm::vec3 dir = dl > 0.0f ? to_l / dl : n;
       // Inside a sphere nothing stands between the receiver and the light.
-      const float reach = r <= 0.0f ? dl - eps : std::max(eps, dl - r);
-      out.push_back({origin, dl > 0.0f ? to_l / dl : n, eps, reach, glm::vec3(e)});
+      float reach = r <= 0.0f ? dl - eps : std::max(eps, dl - r);
+      if (r > 0.0f && dq > r) {
+        // The ray goes to a random point of the sphere's visible cone above the horizon, so
+        // that its visibility is the lit fraction of the sphere on average: a ray to the centre
+        // is a hard shadow, and none where the centre is below the horizon while part of the
+        // sphere is above it. Where little of the cone is above the horizon and no try lands
+        // there, the ray goes to the sphere's point farthest above the horizon.
+        glm::vec3 to_s = light.position + r * n - origin;
+        for (uint64_t k = 0; k < 16; ++k) {
+          const uint64_t h = sample_hash(rng, 3, static_cast<uint64_t>(i), k);
+          float t_surface = 0.0f;
+          const glm::vec3 w =
+              sample_sphere_view(view, n, hash_to_unit(h), hash_to_unit(splitmix(h)), &t_surface);
+          if (!(glm::dot(n, w) > 0.0f)) continue;
+          to_s = q + w * t_surface - origin;
+          break;
+        }
+        const float ds = glm::length(to_s);
+        if (ds > 0.0f) {
+          dir = to_s / ds;
+          reach = std::max(eps, ds - eps);
+        }
+      }
+      out.push_back({origin, dir, eps, reach, glm::vec3(e)});
       total += e;
     }
   } else {
     // The visible cone (or, inside the sphere, the cosine-weighted hemisphere), stratified g x g
-    // and jittered per texel; each sample brings L cos(n, w) / pdf(w) / count, from its own
-    // receiver point.
+    // and jittered per texel, each sample from its own receiver point. A ratio estimator: the
+    // samples' weights cos(n, w) / pdf(w) share the exact unshadowed irradiance of their points,
+    // so that only visibility is sampled. Near a candle, where the cone is wide and straddles
+    // the horizon, weighting each sample by L cos / pdf left a texel's unshadowed light itself
+    // noisy (16 samples: 2.4 % relative RMSE of the small inn's direct light, 4 % in its texels
+    // within a few centimetres of a flame).
     const int g = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples))));
     const int count = g * g;
+    double exact = 0.0, weights = 0.0;
     for (int i = 0; i < count; ++i) {
       const glm::vec3 q = footprint ? receiver(i) : p, origin = q + n * eps;
       SphereView view;
       if (!view_sphere_light(light, q, &view)) continue;
+      exact += sphere_irradiance(view, n);
       const uint64_t h = sample_hash(rng, 0, 0, static_cast<uint64_t>(i));
       const float u = (static_cast<float>(i % g) + hash_to_unit(h)) / static_cast<float>(g);
       const float v =
@@ -272,13 +309,19 @@ bool sample_punctual(const Light& light, const glm::vec3& p, const glm::vec3& n,
       const float cos_w = glm::dot(n, w);
       const float pdf = sphere_view_pdf(view, n, w);
       if (!(cos_w > 0.0f) || !(pdf > 0.0f)) continue;
-      const float e = view.radiance / static_cast<float>(count) * cos_w / pdf;
+      const float weight = cos_w / pdf;
       const glm::vec3 to_s = q + w * t_surface - origin;
       const float ds = glm::length(to_s);
       // A surface point inside the sphere has nothing to trace.
       out.push_back(
-          {origin, ds > 0.0f ? to_s / ds : w, eps, std::max(eps, ds - eps), glm::vec3(e)});
-      total += e;
+          {origin, ds > 0.0f ? to_s / ds : w, eps, std::max(eps, ds - eps), glm::vec3(weight)});
+      weights += weight;
+    }
+    if (weights > 0.0 && exact > 0.0) {
+      const double scale = exact / static_cast<double>(count) / weights;
+      for (size_t k = first; k < out.size(); ++k)
+        out[k].irradiance = glm::vec3(static_cast<float>(scale * out[k].irradiance.x));
+      total = static_cast<float>(exact / static_cast<double>(count));
     }
   }
   if (total <= 0.0f || total < cutoff) {

@@ -98,7 +98,8 @@ glm::vec3 cosine_direction(const glm::vec3& n, float u, float v);
 // Appends to `out` the shadow samples of one punctual light (intensity 1, white) for the texel at
 // p/n; `samples` per light with a radius (rounded down to a square, at least 1), one otherwise.
 // A light with a radius is its sphere (SphereView): with one sample, the exact unshadowed
-// irradiance and one ray to the centre; with more, its visible cone stratified g x g, each ray
+// irradiance and one ray to a random point of its visible cone above the horizon (the centre
+// from inside it); with more, its visible cone stratified g x g, each ray
 // ending on the sphere's surface.
 // With a footprint (texel_footprint.h), every sample leaves its own point of the texel's surface
 // patch, and a light without a radius (or with one sample) gets `positions` samples, one per
