@@ -16,11 +16,11 @@ GatherPreset preset_gather(Quality q) {
     case Quality::kDraft:
       return {64, 4, 2};
     case Quality::kPreview:
-      return {256, 2, 1};
+      return {256, 2, 2};
     case Quality::kProduction:
       return {256, 1, 1};
   }
-  return {256, 2, 1};
+  return {256, 2, 2};
 }
 
 }  // namespace
