@@ -18,7 +18,7 @@ GatherPreset preset_gather(Quality q) {
     case Quality::kPreview:
       return {256, 2, 2};
     case Quality::kProduction:
-      return {256, 1, 1};
+      return {256, 1, 2};
   }
   return {256, 2, 2};
 }

@@ -436,6 +436,13 @@ DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::ve
     for (uint32_t c = 0; c < nc; ++c) {
       const size_t at = size_t(level) * nc + c;
       float wsum = 0.0f;
+      // Per texel, passes after the first blend open texels only (kOpenNearField).
+      auto openness = [&](uint32_t t) {
+        if (!near || level == 0 || grid.level != 1) return 1.0f;
+        const float r = (*near)[t] / kOpenNearField;
+        return std::exp(-r * r);
+      };
+      const float open = openness(c);
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           const uint32_t q = dx == 0 && dy == 0 ? c : grid.link(c, level, dx, dy);
@@ -448,6 +455,7 @@ DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::ve
             const float dn = ((*near)[c] - (*near)[q]) / near_sigma;
             w *= std::exp(-dn * dn);
           }
+          if (q != c) w *= std::min(open, openness(q));
           dw.weight[at * kTaps + size_t((dy + 1) * 3 + dx + 1)] = w;
           wsum += w;
         }

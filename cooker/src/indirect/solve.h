@@ -133,12 +133,22 @@ constexpr float kNearFieldSpacings = 4.0f;
 // surfaces at low ray counts.
 constexpr float kNearFieldSigma = 0.05f;
 float near_field_sigma(int rays);
+// Gathered per texel (level 1), the denoiser's passes after the first blend two texels by
+// exp(-(near / kOpenNearField)^2) of the less open one: fully on open surfaces (a ceiling, the
+// middle of a floor), hardly at contacts and creases (near 0.3 and more). Open surfaces are where
+// bounce light is smooth and where a gather ray that lands on a small, very bright surface (a
+// candle's top) makes a dot; contacts are where per-texel detail is real. On blocks (preview,
+// draft) the near field spans several texels, most blocks of a small room count as contacts, and
+// the magnification already spreads such hits: they filter as before. Chosen on the small inn, the
+// room and the thin panel at production (docs/accuracy.md, section (h)): 0.10 to 0.25 gave the
+// same.
+constexpr float kOpenNearField = 0.15f;
 std::vector<float> near_field(const GatherOperator& op);
 
 // Edge-avoiding a-trous filter over `levels` passes (steps 1, 2, 4, ... blocks), weights from the
-// coarse texels' charts, normals, planes and near field (`near`, near_field(); null: not used)
-// only, never from values: linear, so it commutes with the decomposition. 0 levels: no
-// filtering.
+// coarse texels' charts, normals, planes and near field (`near`, near_field(); null: not used;
+// per texel, passes after the first also by kOpenNearField) only, never from values: linear, so it commutes
+// with the decomposition. 0 levels: no filtering.
 void denoise(const CoarseGrid& grid, int levels, CoarseMap& map,
              const std::vector<float>* near = nullptr, float near_sigma = kNearFieldSigma);
 
