@@ -431,18 +431,21 @@ DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::ve
   dw.total.assign(size_t(dw.levels) * nc, 0.0f);
   const float spacing = coarse_spacing(grid);
   constexpr float kKernel[3] = {0.25f, 0.5f, 0.25f};
+  // Per texel, passes after the first blend open texels only (kOpenNearField): each texel's
+  // openness, once.
+  std::vector<float> open;
+  if (near && grid.level == 1 && dw.levels > 1) {
+    open.resize(nc);
+    for (uint32_t c = 0; c < nc; ++c) {
+      const float r = (*near)[c] / kOpenNearField;
+      open[c] = std::exp(-r * r);
+    }
+  }
   for (int level = 0; level < dw.levels; ++level) {
     const float sigma = float(1 << level) * spacing;
     for (uint32_t c = 0; c < nc; ++c) {
       const size_t at = size_t(level) * nc + c;
       float wsum = 0.0f;
-      // Per texel, passes after the first blend open texels only (kOpenNearField).
-      auto openness = [&](uint32_t t) {
-        if (!near || level == 0 || grid.level != 1) return 1.0f;
-        const float r = (*near)[t] / kOpenNearField;
-        return std::exp(-r * r);
-      };
-      const float open = openness(c);
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           const uint32_t q = dx == 0 && dy == 0 ? c : grid.link(c, level, dx, dy);
@@ -455,7 +458,7 @@ DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::ve
             const float dn = ((*near)[c] - (*near)[q]) / near_sigma;
             w *= std::exp(-dn * dn);
           }
-          if (q != c) w *= std::min(open, openness(q));
+          if (level > 0 && !open.empty() && q != c) w *= std::min(open[c], open[q]);
           dw.weight[at * kTaps + size_t((dy + 1) * 3 + dx + 1)] = w;
           wsum += w;
         }
