@@ -162,10 +162,13 @@ class PathTracer {
         const float t_hit = h.hit ? h.t : std::numeric_limits<float>::infinity();
         const float pdf_dir = p.cos_dir / kPi;
         if (!(pdf_dir > 0.0f)) continue;
-        // Light spheres crossed before the hit.
+        // Light spheres crossed before the hit, seen from the vertex itself as next_event's cone
+        // is: from the ray's origin, eps_ above it, a sphere a few eps_ away looks wider, and the
+        // directions only the wider cone holds, which next_event never samples, counted in full
+        // (candle wax 1 cm under its flame's sphere came out 1.2 % too bright in the inn).
         for (const LitLight& l : spheres_) {
           const float ts =
-              sphere_hit_distance(rays[i].origin, p.dir, l.light->position, l.light->radius);
+              sphere_hit_distance(p.position, p.dir, l.light->position, l.light->radius);
           if (!(ts > 0.0f) || !(ts < t_hit)) continue;
           SphereView view;
           if (!view_sphere_light(*l.light, p.position, &view)) continue;
