@@ -390,6 +390,26 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     return locator ? locator->find(point, h.geometric_normal)
                    : texel_of_hit(texels, surfaces, h, point, under);
   };
+  // Ray k of coarse texel c, whose hash offsets are (o1, o2): traced below, and again for the few
+  // that land on a buried texel.
+  auto gather_ray = [&](uint32_t c, int k, double o1, double o2) {
+    const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
+    const uint32_t t = g.members[m0 + uint32_t(k) % mc];
+    double u = o1 + kA1 * double(k + 1), v = o2 + kA2 * double(k + 1);
+    u -= std::floor(u);
+    v -= std::floor(v);
+    const glm::vec3 n = texels.normal[t];
+    const glm::vec3 p =
+        options.footprints
+            ? footprint_point((*options.footprints)[t], texels.position[t], k / int(mc),
+                              sample_hash(options.seed, t, 0x7061746368ull, 0))
+            : texels.position[t];
+    return Ray{p + n * eps, eps, cosine_dir(n, float(u), float(v)), extent};
+  };
+  auto ray_offsets = [&](uint32_t c) {
+    const uint64_t hsh = sample_hash(options.seed, c, 0x6761746865ull, 0);
+    return std::pair<double, double>(hash_to_unit(hsh), hash_to_unit(sample_hash(hsh, 1, 2, 3)));
+  };
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
     std::vector<CrossingHit>& ch = row_hits[size_t(by)];
@@ -403,23 +423,10 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<uint32_t> under(static_cast<size_t>(n_rays), kNoTexel);
     for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
-      const uint64_t hsh = sample_hash(options.seed, c, 0x6761746865ull, 0);
-      const double o1 = hash_to_unit(hsh), o2 = hash_to_unit(sample_hash(hsh, 1, 2, 3));
+      const auto [o1, o2] = ray_offsets(c);
       uint32_t crossings_here = 0;
       // One texel's rays leave a few nearby points: coherent, so they are traced as packets.
-      for (int k = 0; k < n_rays; ++k) {
-        const uint32_t t = g.members[m0 + uint32_t(k) % mc];
-        double u = o1 + kA1 * double(k + 1), v = o2 + kA2 * double(k + 1);
-        u -= std::floor(u);
-        v -= std::floor(v);
-        const glm::vec3 n = texels.normal[t];
-        const glm::vec3 p =
-            options.footprints
-                ? footprint_point((*options.footprints)[t], texels.position[t], k / int(mc),
-                                  sample_hash(options.seed, t, 0x7061746368ull, 0))
-                : texels.position[t];
-        rays[size_t(k)] = {p + n * eps, eps, cosine_dir(n, float(u), float(v)), extent};
-      }
+      for (int k = 0; k < n_rays; ++k) rays[size_t(k)] = gather_ray(c, k, o1, o2);
       tracer.intersect_many(rays.data(), n_rays, first.data(), true);
       // The texels under the hits are far apart in memory: fetched for all rays at once, their
       // cache misses overlap instead of stalling ray after ray.
@@ -500,13 +507,10 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         if (member_buried[m]) buried[g.members[m0 + m]] = 1;
     }
   });
-  // A hit on a buried texel moves to the nearest texel of the same surface that is not.
-  auto resolve = [&](uint32_t f) {
-    if (f == kNoTexel || f == kBackFace) return kNoTexel;
-    if (!buried[f]) return g.coarse_of[f];
+  // Calls visit(t, dx, dy) for each texel within two of buried texel f in the page that is of
+  // its surface and not buried.
+  auto for_each_unburied = [&](uint32_t f, auto&& visit) {
     const int x0 = int(f % uint32_t(texels.width)), y0 = int(f / uint32_t(texels.width));
-    uint32_t best = kNoTexel;
-    int best_d2 = 1 << 30;
     for (int dy = -2; dy <= 2; ++dy)
       for (int dx = -2; dx <= 2; ++dx) {
         const int x = x0 + dx, y = y0 + dy;
@@ -515,11 +519,49 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         if (!texels.valid[t] || buried[t] || texels.mesh[t] != texels.mesh[f] ||
             glm::dot(texels.normal[t], texels.normal[f]) < kSameSurfaceCos)
           continue;
-        if (dx * dx + dy * dy < best_d2) {
-          best_d2 = dx * dx + dy * dy;
-          best = uint32_t(t);
-        }
+        visit(uint32_t(t), dx, dy);
       }
+  };
+  // A static hit on a buried texel (its sample point inside solid geometry: a ceiling texel under
+  // a partition) moves to the texel of the same surface nearest to the hit point that is not
+  // buried and that the hit point sees. Nearest in the page alone gave a hit in one room the texel
+  // beyond the partition, lit by the other room's lamp. The ray is traced again for its point:
+  // few rays land on buried texels, and none is stored.
+  auto resolve_buried = [&](uint32_t f, const Ray& ray) {
+    const Hit h = tracer.intersect(ray.origin, ray.dir, ray.tmin, ray.tmax, false);
+    if (!h.hit) return kNoTexel;
+    const glm::vec3 point = ray.origin + ray.dir * h.t;
+    const glm::vec3 up =
+        glm::dot(h.geometric_normal, ray.dir) < 0.0f ? h.geometric_normal : -h.geometric_normal;
+    std::pair<float, uint32_t> near[25];
+    int count = 0;
+    for_each_unburied(f, [&](uint32_t t, int, int) {
+      const glm::vec3 d = texels.position[t] - point;
+      near[count++] = {glm::dot(d, d), t};
+    });
+    std::sort(near, near + count);
+    const glm::vec3 a = point + up * eps;
+    for (int i = 0; i < count; ++i) {
+      const uint32_t t = near[i].second;
+      const glm::vec3 d = texels.position[t] + texels.normal[t] * eps - a;
+      const float len = glm::length(d);
+      if (!(len > 2.0f * eps) || !tracer.occluded_static(a, d / len, eps, len - eps))
+        return g.coarse_of[t];
+    }
+    return kNoTexel;
+  };
+  // An object's hit on a buried texel moves to the nearest such texel in the page.
+  auto resolve = [&](uint32_t f) {
+    if (f == kNoTexel || f == kBackFace) return kNoTexel;
+    if (!buried[f]) return g.coarse_of[f];
+    uint32_t best = kNoTexel;
+    int best_d2 = 1 << 30;
+    for_each_unburied(f, [&](uint32_t t, int dx, int dy) {
+      if (dx * dx + dy * dy < best_d2) {
+        best_d2 = dx * dx + dy * dy;
+        best = t;
+      }
+    });
     return best == kNoTexel ? kNoTexel : g.coarse_of[best];
   };
   for (int l = 0; l < GatherOperator::kLevels; ++l) {
@@ -534,11 +576,18 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     size_t next = 0;
     for (uint32_t c = row_first[size_t(by)]; c < row_first[size_t(by) + 1]; ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
+      const auto [o1, o2] = ray_offsets(c);
       uint32_t used[GatherOperator::kLevels] = {0, 0, 0};
       uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
       for (int k = 0; k < n_rays; ++k) {
         const bool drop = buried[g.members[m0 + uint32_t(k) % mc]] != 0;
-        hits[k] = drop ? kNoTexel : resolve(hits[k]);
+        const uint32_t f = hits[k];
+        if (drop)
+          hits[k] = kNoTexel;
+        else if (f != kNoTexel && f != kBackFace && buried[f])
+          hits[k] = resolve_buried(f, gather_ray(c, k, o1, o2));
+        else
+          hits[k] = resolve(f);
         for (int l = 0; l < GatherOperator::kLevels; ++l)
           if (k < op.level_rays[l] && !drop) ++used[l];
       }

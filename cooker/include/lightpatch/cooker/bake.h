@@ -49,7 +49,7 @@ struct BakeOptions {
   bool indirect = true;
   Integrator integrator = Integrator::kGather;
   // Final gathering, per preset: draft level 4 / 64 rays / 2 denoise passes, preview 2 / 256 / 2,
-  // production 2 / 1024 / 1. The level is the size (texels per axis, 1, 2, 4 or 8) of the coarse
+  // production 1 / 256 / 2. The level is the size (texels per axis, 1, 2, 4 or 8) of the coarse
   // texels on which bounce light is computed; denoise passes step 1, 2 and 4 coarse texels.
   int gather_rays = 0;     // rays per coarse texel; 0 = preset
   int indirect_scale = 0;  // 1, 2, 4 or 8; 0 = preset
