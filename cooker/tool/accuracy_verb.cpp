@@ -93,6 +93,11 @@ struct Setting {
 
 struct Metrics {
   double rel_rmse = 0.0, max_rel_error = 0.0, psnr_db = 0.0;
+  int max_x = -1, max_y = -1;  // the texel of max_rel_error (reference layout), -1 if none
+  // The same maximum with each channel's difference less kNoiseSigmas of the reference's standard
+  // error there (never below 0): what the reference's own noise cannot explain. Equals
+  // max_rel_error without a standard error (the cook as reference, the runtime rows).
+  double max_rel_error_beyond_noise = 0.0;
   // rel_rmse^2 = (the row's own error)^2 + (the reference's noise)^2 for independent noise: the
   // row's own error, and whether it is below the noise (then the row cannot be told from rows
   // of smaller error).
@@ -195,23 +200,35 @@ ReferenceStats reference_stats(const FloatImage& ref, const TexelSet& texels, co
   return s;
 }
 
-// `map`: RGB at the reference's layout.
-Metrics compare(const std::vector<float>& map, const FloatImage& ref, const ReferenceStats& s) {
+// Standard errors a texel's difference from the path tracer must exceed to count beyond its noise
+// (one texel in about 700 of honest noise would pass 3 in one channel).
+constexpr double kNoiseSigmas = 3.0;
+
+// `map`: RGB at the reference's layout; `se`: the reference's standard error there, or null.
+Metrics compare(const std::vector<float>& map, const FloatImage& ref, const ReferenceStats& s,
+                const FloatImage* se = nullptr) {
   Metrics m;
   double sq = 0.0;
   for (size_t k = 0; k < s.valid.size(); ++k) {
     const size_t i = s.valid[k];
     const float* r = &ref.data[i * 3];
     const float* x = &map[i * 3];
-    double worst = 0.0;
+    double worst = 0.0, beyond = 0.0;
     for (int c = 0; c < 3; ++c) {
       const double d = double(x[c]) - double(r[c]);
       sq += d * d;
       worst = std::max(worst, std::abs(d));
+      const double noise = se ? kNoiseSigmas * double(se->data[i * 3 + size_t(c)]) : 0.0;
+      beyond = std::max(beyond, std::abs(d) - noise);
     }
     if (s.matters[k]) {
       const double denom = std::max({r[0], r[1], r[2]});
-      m.max_rel_error = std::max(m.max_rel_error, worst / denom);
+      if (worst / denom > m.max_rel_error) {
+        m.max_rel_error = worst / denom;
+        m.max_x = int(i % size_t(ref.width));
+        m.max_y = int(i / size_t(ref.width));
+      }
+      m.max_rel_error_beyond_noise = std::max(m.max_rel_error_beyond_noise, beyond / denom);
     }
   }
   m.rel_rmse = s.sum_sq > 0.0 ? std::sqrt(sq / s.sum_sq) : 0.0;
@@ -424,7 +441,7 @@ std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string
   for (const std::string& n : notes) s += "# " + n + "\n";
   s += "setting,knob,quality,gather_rays,indirect_scale,denoise,area_samples,lightmap_size,"
        "encoding,cook_s,rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto,rel_rmse_excess,"
-       "within_noise\n";
+       "within_noise,max_rel_error_beyond_noise,max_error_x,max_error_y\n";
   for (const Row& r : rows) {
     const BakeOptions& b = r.setting.bake;
     const GatherPreset gp = gather_preset(b);
@@ -440,7 +457,8 @@ std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string
          std::to_string(r.pack_bytes) + "," + number(r.m.rel_rmse) + "," +
          number(r.m.max_rel_error) + "," + number(r.m.psnr_db, "%.3f") + "," +
          (r.pareto ? "1" : "0") + "," + number(r.m.rel_rmse_excess) + "," +
-         (r.m.within_noise ? "1" : "0") + "\n";
+         (r.m.within_noise ? "1" : "0") + "," + number(r.m.max_rel_error_beyond_noise) + "," +
+         std::to_string(r.m.max_x) + "," + std::to_string(r.m.max_y) + "\n";
   }
   return s;
 }
@@ -857,7 +875,7 @@ int verb_accuracy(Args& args) {
     for (float v : map) {
       if (!std::isfinite(v)) throw CookError("accuracy: " + setting.name + ": non-finite texel");
     }
-    row.m = compare(map, reference, stats);
+    row.m = compare(map, reference, stats, o.path_traced ? &reference_error : nullptr);
     rows.push_back(row);
     if (reuse == &fresh && setting.lightmap_size == 0) baked.push_back(std::move(fresh));
     progress.advance();
@@ -971,7 +989,11 @@ int verb_accuracy(Args& args) {
       "rel_rmse = sqrt(sum (x-r)^2 / sum r^2) over RGB of valid texels (here and below: "
       "texels of meshes that cast no shadows, a light's own flame or bulb, left out)",
       "max_rel_error = max over texels that matter of max_c |x_c-r_c| / max_c r_c; texels that "
-      "matter: reference luminance >= 1% of its 99th percentile",
+      "matter: reference luminance >= 1% of its 99th percentile; max_error_x, max_error_y: that "
+      "texel in the reference's page (column, row from the top)",
+      "max_rel_error_beyond_noise: the same with each |x_c-r_c| less 3 standard errors of the "
+      "reference there (not below 0): what the reference's noise cannot explain (= max_rel_error "
+      "without a path-traced reference)",
       "psnr_db = 10 log10(peak^2 / MSE), peak = 99th percentile of the reference's max channel",
       "knob rows vary one knob from the preview preset; rows that differ only in encoding reuse "
       "the bake (cook_s = its bake time + their own pack time)",

@@ -101,10 +101,27 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
 
   const Csv csv = read_csv(dir.file("acc.csv"));
   EXPECT_FALSE(csv.notes.empty());
-  for (const char* column :
-       {"setting", "knob", "quality", "gather_rays", "indirect_scale", "denoise", "area_samples",
-        "lightmap_size", "encoding", "cook_s", "rays", "pack_bytes", "rel_rmse", "max_rel_error",
-        "psnr_db", "pareto", "rel_rmse_excess", "within_noise"}) {
+  for (const char* column : {"setting",
+                             "knob",
+                             "quality",
+                             "gather_rays",
+                             "indirect_scale",
+                             "denoise",
+                             "area_samples",
+                             "lightmap_size",
+                             "encoding",
+                             "cook_s",
+                             "rays",
+                             "pack_bytes",
+                             "rel_rmse",
+                             "max_rel_error",
+                             "psnr_db",
+                             "pareto",
+                             "rel_rmse_excess",
+                             "within_noise",
+                             "max_rel_error_beyond_noise",
+                             "max_error_x",
+                             "max_error_y"}) {
     EXPECT_NE(std::find(csv.header.begin(), csv.header.end(), column), csv.header.end()) << column;
   }
   // --quick: draft, production, and draft with each fixed encoding.
@@ -132,10 +149,21 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
     noise_noted = noise_noted || n.find("reference noise: relative RMSE") != n.npos;
   }
   EXPECT_TRUE(noise_noted);
+  bool below_max = false;
   for (const auto& row : csv.rows) {
     EXPECT_LE(number(row, "rel_rmse_excess"), number(row, "rel_rmse"));
     EXPECT_TRUE(row.at("within_noise") == "0" || row.at("within_noise") == "1");
+    // Beyond the noise: never above the max error, never below 0; the worst texel is in the page.
+    EXPECT_LE(number(row, "max_rel_error_beyond_noise"), number(row, "max_rel_error"));
+    EXPECT_GE(number(row, "max_rel_error_beyond_noise"), 0.0);
+    EXPECT_GE(number(row, "max_error_x"), 0.0);
+    EXPECT_LT(number(row, "max_error_x"), 32.0);
+    EXPECT_GE(number(row, "max_error_y"), 0.0);
+    EXPECT_LT(number(row, "max_error_y"), 32.0);
+    below_max =
+        below_max || number(row, "max_rel_error_beyond_noise") < number(row, "max_rel_error");
   }
+  EXPECT_TRUE(below_max) << "the path tracer's noise took nothing off any row's max error";
   EXPECT_NE(first.err.find("reference: baking (path tracing"), std::string::npos) << first.err;
   ASSERT_TRUE(by_name.count("preset=draft"));
   ASSERT_TRUE(by_name.count("preset=production"));
