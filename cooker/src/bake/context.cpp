@@ -216,6 +216,22 @@ void BakeContext::light_samples(int li, size_t t, std::vector<LightSample>& out)
                   texel_samples);
 }
 
+namespace {
+constexpr uint64_t kPenumbraSalt = 0x70656e756d627261ull;  // "penumbra"
+}  // namespace
+
+bool BakeContext::penumbra_light_samples(int li, size_t t, std::vector<LightSample>& out) const {
+  const LightPlan& p = lights[static_cast<size_t>(li)];
+  const Light& light = scene.lights[static_cast<size_t>(li)];
+  const TexelFootprint* f = footprint(t);
+  const bool sized = light.type != LightType::kDirectional && light.radius > 0.0f;
+  if (!f && !sized) return false;
+  sample_punctual(light, texels.position[t], texels.normal[t], p.samples * kPenumbraFactor,
+                  sample_hash(texel_rng(t, li + 1), kPenumbraSalt, 0, 0), eps, extent, p.cutoff,
+                  out, f, texel_samples * kPenumbraFactor);
+  return true;
+}
+
 void BakeContext::emissive_samples(size_t t, std::vector<LightSample>& out) const {
   emissive.sample(texels.position[t], texels.normal[t], area_samples, texel_rng(t, 0), eps, out,
                   footprint(t));

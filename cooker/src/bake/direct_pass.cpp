@@ -53,10 +53,12 @@ namespace {
 constexpr size_t kBatchSamples = 64;
 
 // The pass over a w x h image of receivers: valid(t), and their samples of a light
-// (light_samples(li, t, out)) and of the emissive surfaces (emissive_samples(t, out)).
-template <typename Valid, typename LightSamples, typename EmissiveSamples>
+// (light_samples(li, t, out); in a penumbra, penumbra_samples(li, t, out) instead where it gives
+// any) and of the emissive surfaces (emissive_samples(t, out)).
+template <typename Valid, typename LightSamples, typename PenumbraSamples, typename EmissiveSamples>
 DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& cand, int channels,
                            int w, int h, const Valid& valid, const LightSamples& light_samples,
+                           const PenumbraSamples& penumbra_samples,
                            const EmissiveSamples& emissive_samples, Progress* progress) {
   const Scene& scene = b.scene;
   const Tracer& tracer = b.tracer;
@@ -70,12 +72,16 @@ DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& ca
   parallel_for(h, b.threads, [&](int y) {
     std::vector<LightSample> samples;  // of the receivers pending, traced together
     SampleRays batch;
-    // One light's samples of one receiver: samples[first, first + count), each carrying
-    // scale * its irradiance (per_channel: its irradiance as it is).
+    std::vector<LightSample> dense;  // the penumbras' samples drawn again, traced together
+    SampleRays dense_batch;
+    // One light's samples of one receiver: samples[first, first + count) (dense: of `dense`),
+    // each carrying scale * its irradiance (per_channel: its irradiance as it is).
     struct Chunk {
       uint32_t first, count;
       glm::vec3 scale;
       bool per_channel;
+      int light;  // scene light, -1 for the emissive surfaces
+      bool dense;
     };
     std::vector<Chunk> chunks;
     std::vector<std::pair<int, size_t>> pending;  // (x, its first chunk)
@@ -88,6 +94,21 @@ DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& ca
     // one a light, would trace packets of one ray), then each receiver's answers summed.
     auto flush = [&]() {
       batch.trace(tracer, samples, nc == 0 ? 0 : max_objects);
+      dense.clear();
+      for (size_t r = 0; r < pending.size(); ++r) {
+        const size_t c_end = r + 1 < pending.size() ? pending[r + 1].second : chunks.size();
+        const size_t t = size_t(y) * size_t(w) + size_t(pending[r].first);
+        for (size_t k = pending[r].second; k < c_end; ++k) {
+          Chunk& ck = chunks[k];
+          if (ck.light < 0 || !batch.penumbra(ck.first, ck.count)) continue;
+          const size_t first = dense.size();
+          if (!penumbra_samples(ck.light, t, dense)) continue;
+          ck.first = uint32_t(first);
+          ck.count = uint32_t(dense.size() - first);
+          ck.dense = true;
+        }
+      }
+      if (!dense.empty()) dense_batch.trace(tracer, dense, nc == 0 ? 0 : max_objects);
       for (size_t r = 0; r < pending.size(); ++r) {
         const int x = pending[r].first;
         const size_t c_end = r + 1 < pending.size() ? pending[r + 1].second : chunks.size();
@@ -124,10 +145,12 @@ DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& ca
         };
         for (size_t k = pending[r].second; k < c_end; ++k) {
           const Chunk& ck = chunks[k];
+          const std::vector<LightSample>& from = ck.dense ? dense : samples;
+          const SampleRays& answers = ck.dense ? dense_batch : batch;
           for (size_t i = ck.first; i < size_t(ck.first) + ck.count; ++i) {
             const glm::vec3 e =
-                ck.per_channel ? samples[i].irradiance : ck.scale * samples[i].irradiance.x;
-            segment(batch.counts[i], batch.objects_of(i), e);
+                ck.per_channel ? from[i].irradiance : ck.scale * from[i].irradiance.x;
+            segment(answers.counts[i], answers.objects_of(i), e);
           }
         }
         for (int ch = 0; ch < channels; ++ch) gm.map.at(x, y, ch) = c_acc[ch];
@@ -147,21 +170,22 @@ DirectPass trace_receivers(const BakeContext& b, int light, const Candidates& ca
       const size_t t = size_t(y) * size_t(w) + size_t(x);
       if (!valid(t)) continue;
       pending.push_back({x, chunks.size()});
-      auto add = [&](auto&& sample, const glm::vec3& scale, bool per_channel) {
+      auto add = [&](auto&& sample, const glm::vec3& scale, bool per_channel, int li) {
         const size_t first = samples.size();
         sample();
-        chunks.push_back({uint32_t(first), uint32_t(samples.size() - first), scale, per_channel});
+        chunks.push_back(
+            {uint32_t(first), uint32_t(samples.size() - first), scale, per_channel, li, false});
       };
       if (light < 0) {
         for (size_t l = 0; l < scene.lights.size(); ++l) {
           const Light& sl = scene.lights[l];
           if (sl.semi_dynamic) continue;
           add([&] { light_samples(static_cast<int>(l), t, samples); }, sl.color * sl.intensity,
-              false);
+              false, static_cast<int>(l));
         }
-        add([&] { emissive_samples(t, samples); }, glm::vec3(1.0f), true);
+        add([&] { emissive_samples(t, samples); }, glm::vec3(1.0f), true, -1);
       } else {
-        add([&] { light_samples(light, t, samples); }, glm::vec3(1.0f), false);
+        add([&] { light_samples(light, t, samples); }, glm::vec3(1.0f), false, light);
       }
       if (samples.size() >= kBatchSamples) flush();
     }
@@ -190,6 +214,9 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
       b, light, cand, channels, texels.width, texels.height,
       [&](size_t t) { return texels.valid[t] != 0; },
       [&](int li, size_t t, std::vector<LightSample>& out) { b.light_samples(li, t, out); },
+      [&](int li, size_t t, std::vector<LightSample>& out) {
+        return b.penumbra_light_samples(li, t, out);
+      },
       [&](size_t t, std::vector<LightSample>& out) { b.emissive_samples(t, out); }, &progress);
   const DirectPoints* pts = b.indirect ? b.indirect->direct_points() : nullptr;
   if (pts && pts->size() > 0) {
@@ -199,6 +226,8 @@ DirectPass trace_direct(const BakeContext& b, int light, const Candidates& cand,
         [&](int li, size_t i, std::vector<LightSample>& out) {
           b.point_light_samples(*pts, li, i, out);
         },
+        // A point's one sample is never a penumbra.
+        [](int, size_t, std::vector<LightSample>&) { return false; },
         [&](size_t i, std::vector<LightSample>& out) { b.point_emissive_samples(*pts, i, out); },
         nullptr));
   }

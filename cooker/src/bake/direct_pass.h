@@ -75,6 +75,15 @@ struct SampleRays {
   // listed at objects_of(i).
   std::vector<int> counts;
   const int* objects_of(size_t i) const { return objects.data() + i * stride; }
+  // Whether samples [first, first + count) of one light at one receiver are a penumbra: some
+  // clear of everything, some blocked or crossing an object. Such a receiver's light is drawn
+  // again denser (BakeContext::penumbra_light_samples) by the groups' direct passes and by
+  // bake_state alike: the decision reads no state, so the decomposition stays exact.
+  bool penumbra(size_t first, size_t count) const {
+    bool clear = false, other = false;
+    for (size_t i = first; i < first + count; ++i) (counts[i] == 0 ? clear : other) = true;
+    return clear && other;
+  }
 
  private:
   std::vector<Ray> rays;

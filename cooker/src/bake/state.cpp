@@ -21,12 +21,13 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
   const std::vector<uint8_t>& visible = resolved.visible;
   const int max_objects = static_cast<int>(scene.objects.size());
   // The state's direct light at every receiver of a w x h image (the light map, or the
-  // integrator's DirectPoints): valid(t), light_samples(li, t, out), emissive_samples(t, out).
+  // integrator's DirectPoints): valid(t), light_samples(li, t, out) (in a penumbra,
+  // penumbra_samples(li, t, out) instead where it gives any), emissive_samples(t, out).
   auto direct = [&](int w, int h, const auto& valid, const auto& light_samples,
-                    const auto& emissive_samples, bool advance) {
+                    const auto& penumbra_samples, const auto& emissive_samples, bool advance) {
     FloatImage out(w, h, 3);
     parallel_for(h, b.threads, [&](int y) {
-      std::vector<LightSample> samples;
+      std::vector<LightSample> samples, dense;
       SampleRays batch;  // traced as the groups' direct passes trace them
       auto unblocked = [&](size_t i) {
         const int n = batch.counts[i];
@@ -45,6 +46,13 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
           samples.clear();
           light_samples(static_cast<int>(li), t, samples);
           batch.trace(b.tracer, samples, max_objects);
+          if (batch.penumbra(0, samples.size())) {
+            dense.clear();
+            if (penumbra_samples(static_cast<int>(li), t, dense)) {
+              samples.swap(dense);
+              batch.trace(b.tracer, samples, max_objects);
+            }
+          }
           float sum = 0.0f;
           for (size_t i = 0; i < samples.size(); ++i)
             if (unblocked(i)) sum += samples[i].irradiance.x;
@@ -65,6 +73,9 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
   FloatImage out = direct(
       texels.width, texels.height, [&](size_t t) { return texels.valid[t] != 0; },
       [&](int li, size_t t, std::vector<LightSample>& o) { b.light_samples(li, t, o); },
+      [&](int li, size_t t, std::vector<LightSample>& o) {
+        return b.penumbra_light_samples(li, t, o);
+      },
       [&](size_t t, std::vector<LightSample>& o) { b.emissive_samples(t, o); }, true);
   const DirectPoints* pts = b.indirect ? b.indirect->direct_points() : nullptr;
   FloatImage at_points;
@@ -74,6 +85,7 @@ FloatImage BakeSession::bake_state(const StateSpec& state, Progress& progress,
         [&](int li, size_t i, std::vector<LightSample>& o) {
           b.point_light_samples(*pts, li, i, o);
         },
+        [](int, size_t, std::vector<LightSample>&) { return false; },
         [&](size_t i, std::vector<LightSample>& o) { b.point_emissive_samples(*pts, i, o); },
         false);
   report.stage_time("bake.state", progress.end());
