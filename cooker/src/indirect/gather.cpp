@@ -212,19 +212,22 @@ class TexelLocator {
   std::unordered_map<int64_t, std::vector<uint32_t>> cells_;
 };
 
+// Two surface points (pa, normal na; pb, nb) see each other past static geometry, both lifted off
+// their surfaces by the tracer's epsilon.
+bool surfaces_see(const Tracer& tracer, const glm::vec3& pa, const glm::vec3& na,
+                  const glm::vec3& pb, const glm::vec3& nb) {
+  const float eps = tracer.epsilon();
+  const glm::vec3 a = pa + na * eps, d = pb + nb * eps - a;
+  const float len = glm::length(d);
+  if (!(len > 2.0f * eps)) return true;
+  return !tracer.occluded_static(a, d / len, eps, len - eps);
+}
+
 }  // namespace
 
 CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads) {
-  const float eps = tracer ? tracer->epsilon() : 0.0f;
-  // Two surface points see each other (both lifted off their surfaces).
   auto sees = [&](const glm::vec3& pa, const glm::vec3& na, const glm::vec3& pb,
-                  const glm::vec3& nb) {
-    if (!tracer) return true;
-    const glm::vec3 a = pa + na * eps, d = pb + nb * eps - a;
-    const float len = glm::length(d);
-    if (!(len > 2.0f * eps)) return true;
-    return !tracer->occluded_static(a, d / len, eps, len - eps);
-  };
+                  const glm::vec3& nb) { return !tracer || surfaces_see(*tracer, pa, na, pb, nb); };
   CoarseGrid g;
   g.level = std::max(1, level);
   const int k = g.level;
@@ -540,12 +543,9 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       near[count++] = {glm::dot(d, d), t};
     });
     std::sort(near, near + count);
-    const glm::vec3 a = point + up * eps;
     for (int i = 0; i < count; ++i) {
       const uint32_t t = near[i].second;
-      const glm::vec3 d = texels.position[t] + texels.normal[t] * eps - a;
-      const float len = glm::length(d);
-      if (!(len > 2.0f * eps) || !tracer.occluded_static(a, d / len, eps, len - eps))
+      if (surfaces_see(tracer, point, up, texels.position[t], texels.normal[t]))
         return g.coarse_of[t];
     }
     return kNoTexel;
