@@ -21,10 +21,22 @@ auto timed(Progress& progress, Report& report, const std::string& stage, F&& f) 
 
 }  // namespace
 
-PreparedScene prepare_scene(Scene scene, const LayoutOptions& options, Progress& progress,
+PreparedScene prepare_scene(Scene scene, const LayoutOptions& given, Progress& progress,
                             Report& report) {
   PreparedScene p;
   p.scene = std::move(scene);
+  LayoutOptions options = given;
+  // Moving lights' panes are bounce light only and live on the indirect map: auto lays the charts
+  // out on 2 x 2 blocks for them (docs/moving_lights.md; at 1 their maps would take full-size
+  // light-map patches, which the pack builder still makes if asked for --indirect-scale 1).
+  bool moving = false;
+  for (const Light& l : p.scene.lights) moving = moving || l.moving;
+  if (moving && !options.align_required && options.align == 1) {
+    options.align = 2;
+    progress.message(
+        "note: moving lights: the charts are laid out on 2x2 blocks for the "
+        "indirect map their panes are stored on (--indirect-scale auto)");
+  }
   p.layout = timed(progress, report, "layout", [&] { return build_layout(p.scene, options); });
   for (const std::string& note : p.layout.notes) progress.message("note: " + note);
   p.tracer = timed(progress, report, "trace setup", [&] { return make_embree_tracer(p.scene); });

@@ -1069,6 +1069,11 @@ void Importer::add_light_node(int node, const glm::mat4& world) {
                                       l.outer_cone > 0 && l.outer_cone <= 1.5707964f))
     throw CookError(err(label + ": spot cone angles need 0 <= inner <= outer <= pi/2, outer > 0"));
   l.semi_dynamic = extras_flag(n.extras, "semiDynamic", err(label));
+  l.moving = extras_flag(n.extras, "moving", err(label));
+  if (l.moving && l.type == LightType::kDirectional)
+    throw CookError(err(label + ": extras.moving is for point and spot lights (a directional light "
+                                "has no position)"));
+  if (l.moving) l.semi_dynamic = true;
   if (n.extras.IsObject() && n.extras.Has("lightRadius")) {
     const tinygltf::Value& r = n.extras.Get("lightRadius");
     if (!r.IsNumber() || !std::isfinite(r.GetNumberAsDouble()) || r.GetNumberAsDouble() < 0)

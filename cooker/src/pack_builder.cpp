@@ -13,10 +13,12 @@
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/probes.h"
 #include "lightpatch/group_rules.h"
+#include "lightpatch/moving_lights.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
 #include "map_split.h"
 #include "pack_writer.h"
+#include "panes/pane_cluster.h"
 #include "patch_extract.h"
 #include "quantize.h"
 #include "worker_pool.h"
@@ -35,6 +37,9 @@ struct MapJob {
   SourcePatch prototype;
   float threshold = 0.0f;
   std::string what;
+  // Stored on the indirect map alone where the pack has one (a moving lights' pane: its bounce
+  // light at the indirect level, pack_format.h), with no light-map part.
+  bool indirect_only = false;
 };
 
 float max3(const glm::vec3& v) {
@@ -302,9 +307,24 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     throw CookError("baked maps: " + std::to_string(maps.lights.size()) + " lights but " +
                     std::to_string(maps.contribution.size()) + " contribution maps");
   }
-  if (maps.lights.size() >= kNone16 || scene.objects.size() >= kNone16) {
-    throw CookError("too many semi-dynamic lights or objects for the pack format (max 65534)");
+  const size_t pack_lights = maps.lights.size() + maps.moving_lights.size() + maps.panes.size();
+  if (pack_lights >= kNone16 || scene.objects.size() >= kNone16) {
+    throw CookError("too many semi-dynamic lights, moving lights and panes (" +
+                    std::to_string(pack_lights) + ") or objects for the pack format (max 65534)");
   }
+  if (maps.panes.size() > kMaxPanes) {
+    throw CookError(std::to_string(maps.panes.size()) + " panes, over the pack's limit of " +
+                    std::to_string(kMaxPanes));
+  }
+  for (int li : maps.moving_lights) {
+    if (li < 0 || size_t(li) >= scene.lights.size() || !scene.lights[size_t(li)].moving ||
+        scene.lights[size_t(li)].type == LightType::kDirectional) {
+      throw CookError("baked maps: moving light " + std::to_string(li) +
+                      " is not a moving point or spot light of the scene");
+    }
+  }
+  if (!maps.panes.empty() && maps.moving_lights.empty())
+    throw CookError("baked maps: panes without a moving light");
   check_map(maps.base, layout, 3, 3, "base map");
 
   // Authored factor of each light, as the baker's significance rule has it (maps.h).
@@ -353,6 +373,29 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.prototype.weight = authored[i];
     j.threshold = light_threshold[i];
     j.what = "contribution map of light '" + scene.lights[size_t(maps.lights[i])].name + "'";
+    jobs.push_back(j);
+  }
+  // The panes, after the lights and the moving lights in the light table.
+  const float pane_threshold_at = pane_significance(scene, half_step);
+  float strongest_moving = 0.0f;
+  for (int li : maps.moving_lights) {
+    const Light& l = scene.lights[size_t(li)];
+    strongest_moving = std::max(strongest_moving, max3(l.color) * l.intensity);
+  }
+  if (!(strongest_moving > 0.0f) || !std::isfinite(strongest_moving)) strongest_moving = 1.0f;
+  const size_t first_pane = maps.lights.size() + maps.moving_lights.size();
+  for (size_t k = 0; k < maps.panes.size(); ++k) {
+    const PaneMap& pm = maps.panes[k];
+    MapJob j;
+    j.map = &pm.map;
+    j.indirect = &pm.indirect;
+    j.indirect_only = true;
+    j.prototype.kind = kGroupContribution;
+    j.prototype.light = int(first_pane + k);
+    j.prototype.weight = strongest_moving;
+    j.threshold = significance(pm.map, pane_threshold_at);
+    j.what = "pane " + std::to_string(k) + " of the moving lights";
+    check_map(pm.map, layout, 3, 3, j.what);
     jobs.push_back(j);
   }
   std::vector<const ShadowMap*> shadows;
@@ -504,10 +547,12 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       return n;
     };
     std::vector<SourcePatch>& plain = per_job[size_t(i)];
-    cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)]);
+    const bool indirect_part = can_split && j.indirect && !j.indirect->data.empty();
+    if (!(j.indirect_only && indirect_part))
+      cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)]);
     SplitDecision& sd = split[size_t(i)];
     sd.plain = cost(plain);
-    if (can_split && j.indirect && !j.indirect->data.empty()) {
+    if (indirect_part) {
       std::vector<SourcePatch> indirect;
       // A grey map's bounce part is grey too (one channel where the bounce is untinted).
       cut(*j.indirect, coarse, kTargetIndirectMap, indirect, split_colour[size_t(i)]);
@@ -519,8 +564,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         add_decoded(indirect[k], indirect_q[k], decoded);
       }
       std::vector<SourcePatch>& detail = split_patches[size_t(i)];
-      cut(light_map_part(*j.map, decoded, scale), layout.regions, kTargetLightMap, detail,
-          split_colour[size_t(i)]);
+      if (!j.indirect_only) {
+        cut(light_map_part(*j.map, decoded, scale), layout.regions, kTargetLightMap, detail,
+            split_colour[size_t(i)]);
+      }
       sd.detail = cost(detail);
       sd.indirect = cost(indirect);
       // A group's light-map patches first, then its indirect ones (pack_format.h).
@@ -540,7 +587,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
   for (size_t i = 0; i < jobs.size(); ++i) {
     const int g = jobs[i].prototype.light;
-    const bool split_group = can_split && (options.always_split || group_split[g] < group_plain[g]);
+    const bool split_group = can_split && (options.always_split || jobs[i].indirect_only ||
+                                           group_split[g] < group_plain[g]);
     if (!split_group || !jobs[i].indirect || jobs[i].indirect->data.empty()) {
       per_job_q[i].clear();
       continue;
@@ -589,6 +637,47 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
              : l.type == LightType::kSpot ? kLightSpot
                                           : kLightDirectional;
     c.lights.push_back(r);
+  }
+  // Moving lights (no groups) and the panes (pack_format.h, "Moving lights"); a pane's authored
+  // colour is its factor for the moving lights' authored poses, by the runtime's own weights.
+  for (int li : maps.moving_lights) {
+    const Light& l = scene.lights[size_t(li)];
+    LightRecord r{};
+    const std::string name = l.name.empty() ? "light_" + std::to_string(li) : l.name;
+    c.add_name(name, &r.name_offset, &r.name_length);
+    for (int k = 0; k < 3; ++k) r.color[k] = l.color[k];
+    r.intensity = l.intensity;
+    r.type = l.type == LightType::kPoint ? kLightPoint : kLightSpot;
+    r.flags = kLightFlagMoving;
+    MovingLightRecord m{};
+    m.light = uint32_t(c.lights.size());
+    for (int k = 0; k < 3; ++k) {
+      m.position[k] = l.position[k];
+      m.direction[k] = l.direction[k];
+    }
+    m.range = l.range;
+    m.inner_cone = l.type == LightType::kSpot ? l.inner_cone : 0.0f;
+    m.outer_cone = l.type == LightType::kSpot ? l.outer_cone : 0.0f;
+    m.radius = l.radius;
+    c.lights.push_back(r);
+    c.moving_lights.push_back(m);
+  }
+  for (size_t k = 0; k < maps.panes.size(); ++k) {
+    PaneRecord pr = maps.panes[k].record;
+    pr.light = uint32_t(c.lights.size());
+    glm::vec3 factor(0.0f);
+    for (size_t m = 0; m < c.moving_lights.size(); ++m) {
+      const Light& l = scene.lights[size_t(maps.moving_lights[m])];
+      const MovingLightRecord& ml = c.moving_lights[m];
+      factor +=
+          l.color * l.intensity * pane_weight(ml, c.lights[ml.light].type, authored_pose(ml), pr);
+    }
+    LightRecord r{};
+    for (int a = 0; a < 3; ++a) r.color[a] = std::isfinite(factor[a]) ? factor[a] : 0.0f;
+    r.intensity = 1.0f;
+    r.type = kLightPane;
+    c.lights.push_back(r);
+    c.panes.push_back(pr);
   }
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     ObjectRecord r{};

@@ -54,6 +54,11 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
     sections.push_back({kSectionProbeSets, c.probe_sets.size() * sizeof(ProbeSetRecord)});
     sections.push_back({kSectionProbeEntries, c.probe_entries.size() * sizeof(ProbeEntry)});
   }
+  const bool moving = !c.moving_lights.empty();
+  if (moving) {
+    sections.push_back({kSectionMovingLights, c.moving_lights.size() * sizeof(MovingLightRecord)});
+    sections.push_back({kSectionPanes, c.panes.size() * sizeof(PaneRecord)});
+  }
   sections.push_back({kSectionAtlasData, atlas_bytes});
   if (!c.meshes.empty()) sections.push_back({kSectionMeshData, mesh_bytes});
 
@@ -114,6 +119,11 @@ std::vector<uint8_t> write_pack(const PackContents& c) {
         c.probe_sets.size() * sizeof(ProbeSetRecord));
     put(find(kSectionProbeEntries).offset, c.probe_entries.data(),
         c.probe_entries.size() * sizeof(ProbeEntry));
+  }
+  if (moving) {
+    put(find(kSectionMovingLights).offset, c.moving_lights.data(),
+        c.moving_lights.size() * sizeof(MovingLightRecord));
+    put(find(kSectionPanes).offset, c.panes.data(), c.panes.size() * sizeof(PaneRecord));
   }
 
   const Pending& atlas_data = find(kSectionAtlasData);

@@ -37,6 +37,10 @@ struct PackContents {
   std::vector<uint32_t> probe_grid_indices;
   std::vector<pack::ProbeSetRecord> probe_sets;
   std::vector<pack::ProbeEntry> probe_entries;
+  // Moving lights and their panes (pack_format.h, "Moving lights"): written only when
+  // `moving_lights` is not empty.
+  std::vector<pack::MovingLightRecord> moving_lights;
+  std::vector<pack::PaneRecord> panes;
 
   // Appends a name to `strings`; returns {offset, length}.
   void add_name(const std::string& name, uint32_t* offset, uint32_t* length);

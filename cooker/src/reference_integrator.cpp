@@ -61,7 +61,8 @@ struct Stream {
 
 struct LitLight {
   const Light* light;
-  glm::vec3 radiant;  // colour * intensity of the state
+  glm::vec3 radiant;         // colour * intensity of the state
+  bool bounce_only = false;  // a moving light: not from the texel's own vertex (depth 0)
 };
 
 // One path between bounces.
@@ -80,7 +81,7 @@ class PathTracer {
  public:
   PathTracer(const Scene& scene, const TexelSet& texels, const std::vector<uint8_t>& traced,
              const Tracer& tracer, const ResolvedState& state, uint64_t seed, bool texel_patch,
-             int threads)
+             int threads, bool moving_direct)
       : scene_(scene),
         texels_(texels),
         traced_(traced),
@@ -90,8 +91,16 @@ class PathTracer {
         footprints_(texel_patch ? texel_footprints(texels, &tracer, threads)
                                 : std::vector<TexelFootprint>()),
         seed_(seed) {
+    // Moving lights at the state's pose (the pointers below point into posed_: sized first).
+    posed_.assign(scene.lights.begin(), scene.lights.end());
     for (size_t i = 0; i < scene.lights.size(); ++i) {
-      if (max3(state.radiant[i]) > 0.0f) lights_.push_back({&scene.lights[i], state.radiant[i]});
+      if (!scene.lights[i].moving) continue;
+      if (i < state.position.size()) posed_[i].position = state.position[i];
+      if (i < state.direction.size()) posed_[i].direction = state.direction[i];
+    }
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+      if (max3(state.radiant[i]) > 0.0f)
+        lights_.push_back({&posed_[i], state.radiant[i], scene.lights[i].moving && !moving_direct});
     }
     for (const LitLight& l : lights_) {
       if (l.light->type != LightType::kDirectional && l.light->radius > 0.0f) spheres_.push_back(l);
@@ -167,6 +176,7 @@ class PathTracer {
         // directions only the wider cone holds, which next_event never samples, counted in full
         // (candle wax 1 cm under its flame's sphere came out 1.2 % too bright in the inn).
         for (const LitLight& l : spheres_) {
+          if (l.bounce_only && p.depth == 0) continue;
           const float ts =
               sphere_hit_distance(p.position, p.dir, l.light->position, l.light->radius);
           if (!(ts > 0.0f) || !(ts < t_hit)) continue;
@@ -216,6 +226,7 @@ class PathTracer {
       owner.push_back(p.value);
     };
     for (const LitLight& l : lights_) {
+      if (l.bounce_only && p.depth == 0) continue;
       const Light& light = *l.light;
       if (light.type == LightType::kDirectional) {
         const float c = glm::dot(p.normal, -light.direction);
@@ -330,6 +341,7 @@ class PathTracer {
   // starts at its own point of the patch.
   std::vector<TexelFootprint> footprints_;
   uint64_t seed_;
+  std::vector<Light> posed_;  // the scene's lights, moving ones at the state's pose
   std::vector<LitLight> lights_;
   std::vector<LitLight> spheres_;  // lit lights with a radius: MIS on the rays that cross them
   bool any_visible_ = false, any_hidden_ = false;
@@ -420,7 +432,7 @@ ReferenceBake bake_reference(const Scene& scene, const TexelSet& texels, const T
   for (size_t t = 0; t < traced.size(); ++t)
     traced[t] = texels.valid[t] && (options.region.empty() || options.region[t]);
   const PathTracer tracer_of_paths(scene, texels, traced, tracer, resolved, options.seed,
-                                   options.texel_patch, threads);
+                                   options.texel_patch, threads, options.moving_direct);
   const int w = texels.width, h = texels.height;
   Accumulator acc(texels.position.size());
   const int passes = (options.samples + kPassSamples - 1) / kPassSamples;

@@ -34,6 +34,25 @@ float finite_non_negative(const json& j, const std::string& where) {
   return static_cast<float>(v);
 }
 
+// A world-space vector: 3 finite numbers within the importer's world (+-1e6 m).
+void parse_vec3(const json& j, const std::string& at, float out[3]) {
+  if (!j.is_array() || j.size() != 3) {
+    throw CookError(at + " must be an array of 3 numbers, got " + shown(j));
+  }
+  for (int c = 0; c < 3; ++c) {
+    const json& v = j[size_t(c)];
+    if (!v.is_number()) {
+      throw CookError(at + "[" + std::to_string(c) + "] must be a number, got " + type_name(v));
+    }
+    const double d = v.get<double>();
+    if (!std::isfinite(d) || std::fabs(d) > 1.0e6) {
+      throw CookError(at + "[" + std::to_string(c) + "] must be finite, within +-1e6, got " +
+                      shown(v));
+    }
+    out[c] = static_cast<float>(d);
+  }
+}
+
 LightOverride parse_light(const json& j, const std::string& where) {
   if (!j.is_object()) throw CookError(where + " must be an object, got " + type_name(j));
   LightOverride o;
@@ -55,8 +74,19 @@ LightOverride parse_light(const json& j, const std::string& where) {
     } else if (key == "intensity") {
       o.intensity = finite_non_negative(*it, at);
       o.has_intensity = true;
+    } else if (key == "position") {
+      parse_vec3(*it, at, o.position);
+      o.has_position = true;
+    } else if (key == "direction") {
+      parse_vec3(*it, at, o.direction);
+      const double len = std::sqrt(double(o.direction[0]) * o.direction[0] +
+                                   double(o.direction[1]) * o.direction[1] +
+                                   double(o.direction[2]) * o.direction[2]);
+      if (!(len > 1e-6)) throw CookError(at + " must not be a zero vector");
+      for (float& c : o.direction) c = static_cast<float>(c / len);
+      o.has_direction = true;
     } else {
-      throw CookError(at + ": unknown key (expected on, color, intensity)");
+      throw CookError(at + ": unknown key (expected on, color, intensity, position, direction)");
     }
   }
   return o;
@@ -141,8 +171,12 @@ std::vector<StateSpec> parse_states_jsonl(const std::string& text, const std::st
 ResolvedState resolve_state(const Scene& scene, const StateSpec& state) {
   ResolvedState r;
   r.radiant.resize(scene.lights.size());
+  r.position.resize(scene.lights.size());
+  r.direction.resize(scene.lights.size());
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     r.radiant[i] = scene.lights[i].color * scene.lights[i].intensity;
+    r.position[i] = scene.lights[i].position;
+    r.direction[i] = scene.lights[i].direction;
   }
   std::vector<std::string> unknown;
   for (const auto& [name, o] : state.lights) {
@@ -156,6 +190,14 @@ ResolvedState resolve_state(const Scene& scene, const StateSpec& state) {
     if (!l.semi_dynamic) {
       throw CookError("state changes light '" + name +
                       "', which is static (only semi-dynamic lights can change)");
+    }
+    if ((o.has_position || o.has_direction) && !l.moving) {
+      throw CookError("state moves light '" + name +
+                      "', which is not marked moving (extras \"moving\": true)");
+    }
+    if (o.has_position) r.position[i] = glm::vec3(o.position[0], o.position[1], o.position[2]);
+    if (o.has_direction) {
+      r.direction[i] = glm::vec3(o.direction[0], o.direction[1], o.direction[2]);
     }
     const glm::vec3 color = o.has_color ? glm::vec3(o.color[0], o.color[1], o.color[2]) : l.color;
     const float intensity = o.has_intensity ? o.intensity : l.intensity;

@@ -92,6 +92,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.bake.probes.enabled = !args.flag("--no-probes");
   o.bake.probes.spacing = args.float_option("--probe-spacing", 0.0f, 1e-3f, 1e6f);
   o.bake.probes.rays = args.int_option("--probe-rays", 0, 1, 65536);
+  o.bake.panes = args.int_option("--panes", 0, 1, kMaxPaneOption);
   o.quiet = args.flag("--quiet", "-q");
   o.layout.align = layout_align(o.bake);
   o.layout.align_required = o.bake.indirect_scale > 0;
@@ -227,7 +228,9 @@ int verb_bake_state(Args& args) {
   const PreviewOptions picture = parse_preview_options(args, "--png");
   if (picture.view == PreviewView::kAtlases)
     throw ArgsError("--view atlases shows a pack's atlases: use lightpatch preview");
+  const bool moving_direct = args.flag("--moving-direct");
   CookOptions o = parse_cook_options(args, "MAP.pfm");
+  o.bake.moving_direct = moving_direct;
   o.scene_path = args.positional("SCENE");
   args.finish();
   const bool reference = o.bake.integrator == Integrator::kReference;
@@ -255,6 +258,7 @@ int verb_bake_state(Args& args) {
     ref.seed = o.bake.seed;
     ref.threads = o.bake.threads;
     ref.texel_patch = o.bake.texel_samples != 1;
+    ref.moving_direct = o.bake.moving_direct;
     ReferenceBake rb = cook_reference_state(p, state, ref, progress, report);
     progress.message("reference: " + std::to_string(rb.samples) + " samples, " +
                      std::to_string(rb.rays) + " rays, mean relative standard error " +

@@ -41,6 +41,15 @@ TargetTexels settle(Runtime& runtime) {
 
 void push(const PackView& pack, const SceneState& state, Runtime& runtime) {
   for (uint32_t l = 0; l < state.light_count(); ++l) {
+    if (pack.light_is_pane(l)) continue;  // the runtime sets panes from the moving lights
+    if (pack.light_moves(l)) {
+      const LightPose pose = state.light_pose(l);
+      const LightPose have = runtime.light_pose(l);
+      if (std::memcmp(&pose, &have, sizeof pose) != 0 &&
+          runtime.set_light_pose(l, pose) != Status::kOk) {
+        throw CookError("GLES backend: light " + std::to_string(l) + ": pose out of range");
+      }
+    }
     const LightState want = state.light(l);
     const LightState have = runtime.light(l);
     if (want.on == have.on && want.intensity == have.intensity &&
@@ -79,7 +88,10 @@ void recompose_gles(const PackView& pack, const std::vector<cooker::StateSpec>& 
   }
   Error error;
   Runtime runtime;
-  if (runtime.open(pack, RuntimeLimits(), &error) != Status::kOk) {
+  // Every pane follows its moving lights in the first update (the reference: exact factors).
+  RuntimeLimits limits;
+  limits.max_pane_changes = pack::kMaxPanes;
+  if (runtime.open(pack, limits, &error) != Status::kOk) {
     throw CookError(std::string("GLES backend: ") + status_name(error.status) + ": " +
                     error.message);
   }

@@ -63,6 +63,9 @@ constexpr const char* kCookOptionsHelp =
     "                         would need more than 65,536 grid points)\n"
     "  --probe-rays N         gather rays per probe (preset: draft 256, preview 512, production\n"
     "                         1024)\n"
+    "  --panes N              panes of the moving lights' bounce light (lights with extras\n"
+    "                         \"moving\": true), before splitting those that reach round a\n"
+    "                         corner (at most 4N; default 32; docs/moving_lights.md)\n"
     "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
     "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
     "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
@@ -116,8 +119,12 @@ constexpr const char* kBakeStateHelp =
     "recomposition must match. Same layout as `cook` with the same options.\n\n"
     "options:\n"
     "  -o, --output MAP.pfm   the light map (irradiance, linear RGB float, PFM)\n"
-    "  --state STATE.json     lights on/off, colour, intensity; objects visible (default: as\n"
-    "                         authored, all on and visible)\n"
+    "  --state STATE.json     lights on/off, colour, intensity, a moving light's position and\n"
+    "                         direction; objects visible (default: as authored, all on and\n"
+    "                         visible)\n"
+    "  --moving-direct        also the moving lights' direct light (for pictures; the map\n"
+    "                         otherwise holds their bounce light only, as a pack does: their\n"
+    "                         direct light is the game's)\n"
     "  --integrator I         gather (default): the cook's integrator (below);\n"
     "                         reference: unbiased path tracing from every texel (next-event\n"
     "                         estimation to every light, MIS for light spheres and emissive\n"
@@ -226,8 +233,8 @@ const Verb kVerbs[] = {
      "[--quality draft|preview|production] [--report REPORT.json] [--no-indirect] [--no-plan] "
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
-     "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--seed N] "
-     "[--threads N] [--quiet]",
+     "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--panes N] "
+     "[--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,
@@ -237,7 +244,7 @@ const Verb kVerbs[] = {
      "assemble DIR -o OUT.lpk [--threads N] [--report REPORT.json] [--quiet]", kAssembleHelp},
     {"bake-state", lightpatch::tool::verb_bake_state,
      "bake-state SCENE [--state STATE.json] -o MAP.pfm [--integrator gather|reference] "
-     "[--samples N] [--std-error ERR.pfm] [cook's options]",
+     "[--samples N] [--std-error ERR.pfm] [--moving-direct] [cook's options]",
      kBakeStateHelp},
     {"info", lightpatch::tool::verb_info, "info PACK [--json]",
      "Prints a pack's lights, objects, groups, patches, atlases, bytes and packing waste.\n\n"

@@ -75,6 +75,10 @@ const char* section_label(uint32_t type) {
       return "probe_sets";
     case pack::kSectionProbeEntries:
       return "probe_entries";
+    case pack::kSectionMovingLights:
+      return "moving_lights";
+    case pack::kSectionPanes:
+      return "panes";
   }
   return "unknown";
 }
@@ -91,15 +95,27 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                        {"scale", p.indirect_scale()}};
   nlohmann::ordered_json lights = nlohmann::ordered_json::array();
   for (uint32_t i = 0; i < p.light_count(); ++i) {
+    if (p.light_is_pane(i)) continue;  // a moving lights' pane, counted under "panes"
     const pack::LightRecord& l = p.light(i);
     lights.push_back({{"name", name_string(p.light_name(i))},
                       {"color", {l.color[0], l.color[1], l.color[2]}},
                       {"intensity", l.intensity}});
   }
+  // Moving lights (pack_format.h, "Moving lights") with their authored pose, and the panes that
+  // carry their bounce light.
+  nlohmann::ordered_json moving = nlohmann::ordered_json::array();
+  for (uint32_t k = 0; k < p.moving_light_count(); ++k) {
+    const pack::MovingLightRecord& m = p.moving_light(k);
+    moving.push_back({{"name", name_string(p.light_name(m.light))},
+                      {"type", p.light(m.light).type == pack::kLightSpot ? "spot" : "point"},
+                      {"position", {m.position[0], m.position[1], m.position[2]}}});
+  }
   nlohmann::ordered_json objects = nlohmann::ordered_json::array();
   for (uint32_t i = 0; i < p.object_count(); ++i) objects.push_back(name_string(p.object_name(i)));
   j["lights"] = lights;
   j["objects"] = objects;
+  j["moving_lights"] = moving;
+  j["panes"] = {{"count", p.pane_count()}, {"bytes", p.pane_bytes()}};
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
                                          square = 0, indirect = 0;
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
@@ -258,12 +274,23 @@ int verb_info(Args& args) {
         pack.view.indirect_width(), pack.view.indirect_height(), pack.view.indirect_scale(),
         pt["indirect_map"].get<unsigned long long>());
   }
-  std::printf("lights         %u\n", pack.view.light_count());
+  std::printf("lights         %zu\n", j["lights"].size());
   for (const auto& l : j["lights"]) {
     std::printf("  %s  colour (%g, %g, %g)  intensity %g\n",
                 cooker::printable(l["name"].get<std::string>(), SIZE_MAX).c_str(),
                 l["color"][0].get<double>(), l["color"][1].get<double>(),
                 l["color"][2].get<double>(), l["intensity"].get<double>());
+  }
+  if (pack.view.moving_light_count() > 0) {
+    std::printf("moving lights  %u\n", pack.view.moving_light_count());
+    for (const auto& m : j["moving_lights"]) {
+      std::printf("  %s  %s at (%g, %g, %g)\n",
+                  cooker::printable(m["name"].get<std::string>(), SIZE_MAX).c_str(),
+                  m["type"].get<std::string>().c_str(), m["position"][0].get<double>(),
+                  m["position"][1].get<double>(), m["position"][2].get<double>());
+    }
+    std::printf("panes          %u (%llu bytes)\n", pack.view.pane_count(),
+                static_cast<unsigned long long>(pack.view.pane_bytes()));
   }
   std::printf("objects        %u\n", pack.view.object_count());
   for (const auto& o : j["objects"])

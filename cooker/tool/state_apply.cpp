@@ -1,5 +1,6 @@
 #include "state_apply.h"
 
+#include <algorithm>
 #include <string>
 
 #include "lightpatch/cooker/error.h"
@@ -14,12 +15,17 @@ std::string names_of(const PackView& pack, bool lights) {
   constexpr uint32_t kShown = 20;
   std::string s;
   const uint32_t n = lights ? pack.light_count() : pack.object_count();
-  for (uint32_t i = 0; i < n && i < kShown; ++i) {
+  uint32_t shown = 0, listed = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (lights && pack.light_is_pane(i)) continue;  // a pane is no light of the scene
+    ++listed;
+    if (shown == kShown) continue;
+    ++shown;
     const Name name = lights ? pack.light_name(i) : pack.object_name(i);
     if (!s.empty()) s += ", ";
     s += cooker::printable(std::string_view(name.data, name.length));
   }
-  if (n > kShown) s += " and " + std::to_string(n - kShown) + " more";
+  if (listed > shown) s += " and " + std::to_string(listed - shown) + " more";
   return s.empty() ? "none" : s;
 }
 
@@ -39,6 +45,21 @@ void apply_state(const cooker::StateSpec& spec, const PackView& pack, SceneState
         (o.has_intensity && state->set_light_intensity(li, o.intensity) != Status::kOk)) {
       throw cooker::CookError("light " + cooker::quote(name) +
                               ": colour and intensity must be finite and >= 0");
+    }
+    if (o.has_position || o.has_direction) {
+      if (!pack.light_moves(li)) {
+        throw cooker::CookError("light " + cooker::quote(name) +
+                                ": a position or direction is for a moving light (extras.moving); "
+                                "this one is not");
+      }
+      LightPose pose = state->light_pose(li);
+      if (o.has_position) std::copy(o.position, o.position + 3, pose.position);
+      if (o.has_direction) std::copy(o.direction, o.direction + 3, pose.direction);
+      if (state->set_light_pose(li, pose) != Status::kOk) {
+        throw cooker::CookError("light " + cooker::quote(name) +
+                                ": the position must be finite and within 1e6 m of the origin, "
+                                "the direction a unit vector");
+      }
     }
   }
   for (const auto& [name, visible] : spec.objects) {

@@ -285,6 +285,40 @@ scenegen::SceneBuilder thin_panel_room() {
   return b;
 }
 
+scenegen::SceneBuilder two_rooms_lantern() {
+  using namespace scenegen;
+  SceneBuilder b;
+  const int plaster = b.add_material({.name = "plaster", .base_color = {0.7f, 0.7f, 0.7f, 1.0f}});
+  const int red = b.add_material({.name = "rug", .base_color = {0.6f, 0.15f, 0.1f, 1.0f}});
+  // Slabs of 10 cm, each its own node (a level is walls and floors of a few big boxes): the floor
+  // and ceiling under both rooms, the outer walls, and the partition with a doorway.
+  const float h = 2.5f;
+  auto slab = [&](const std::string& name, glm::vec3 lo, glm::vec3 hi) {
+    b.add_mesh_node(name, make_box(lo, hi), plaster);
+  };
+  slab("floor", {-4.1f, -0.1f, -2.1f}, {4.1f, 0.0f, 2.1f});
+  slab("ceiling", {-4.1f, h, -2.1f}, {4.1f, h + 0.1f, 2.1f});
+  slab("wall_north", {-4.1f, 0.0f, -2.1f}, {4.1f, h, -2.0f});
+  slab("wall_south", {-4.1f, 0.0f, 2.0f}, {4.1f, h, 2.1f});
+  slab("wall_west", {-4.1f, 0.0f, -2.0f}, {-4.0f, h, 2.0f});
+  slab("wall_east", {4.0f, 0.0f, -2.0f}, {4.1f, h, 2.0f});
+  slab("partition", {-0.1f, 0.0f, -2.0f}, {0.1f, h, 1.0f});
+  slab("lintel", {-0.1f, 2.0f, 1.0f}, {0.1f, h, 2.0f});
+  b.add_mesh_node("rug", make_box({-3.0f, 0.0f, -1.5f}, {-1.0f, 0.02f, 0.5f}), red);
+  b.add_light_node("lamp_b", {.name = "lamp_b", .type = LightType::kPoint, .intensity = 6.0f},
+                   {2.0f, 2.0f, 0.0f}, {0, -1, 0}, /*semi_dynamic=*/false,
+                   /*light_radius=*/0.05f);
+  const int lantern = b.add_light_node("lantern",
+                                       {.name = "lantern",
+                                        .type = LightType::kPoint,
+                                        .color = {1.0f, 0.8f, 0.55f},
+                                        .intensity = 3.0f},
+                                       {-2.0f, 1.2f, -1.0f}, {0, -1, 0}, /*semi_dynamic=*/false,
+                                       /*light_radius=*/0.04f);
+  b.node(lantern).moving = true;
+  return b;
+}
+
 scenegen::SceneBuilder low_slab_room() {
   using namespace scenegen;
   SceneBuilder b;

@@ -89,4 +89,12 @@ scenegen::SceneBuilder thin_panel_room();
 // are left to the cooker's unwrap.
 scenegen::SceneBuilder low_slab_room();
 
+// A moving light between two rooms (issue 16's test scene): two closed plaster rooms of 3.9 x 2.5 x
+// 4 m side by side along X (room A x < -0.1, room B x > 0.1), 10 cm slabs each their own node, a
+// 20 cm partition with a 1 x 2 m doorway at z in [1, 2], a red rug in room A ("rug"), a static
+// lamp in room B ("lamp_b", 6 cd, radius 5 cm) and a moving lantern ("lantern", extras "moving":
+// true, 3 cd, radius 4 cm) at (-2, 1.2, -1) in room A. Big quads (boxes); light-map UVs left to
+// the cooker's unwrap.
+scenegen::SceneBuilder two_rooms_lantern();
+
 }  // namespace lightpatch::test

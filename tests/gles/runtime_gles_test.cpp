@@ -17,6 +17,7 @@
 
 #include "lightpatch/cpu_recomposer.h"
 #include "lightpatch/half_float.h"
+#include "lightpatch/moving_lights.h"
 #include "lightpatch/platform/egl_context.h"
 #include "lightpatch/platform/gl.h"
 #include "lightpatch/scene_state.h"
@@ -51,12 +52,15 @@ class Gles : public ::testing::Test {
     char message[256] = {};
     ASSERT_TRUE(context_.create_headless(message, sizeof message)) << message;
   }
-  void open(const SyntheticOptions& o, RecomposePath path = RecomposePath::kGpuFloat) {
+  void open(const SyntheticOptions& o, RecomposePath path = RecomposePath::kGpuFloat,
+            uint32_t max_pane_changes = RuntimeLimits().max_pane_changes) {
     runtime_.close();
     bytes_ = make_synthetic_pack(o);
     Error error;
     ASSERT_TRUE(bytes_.open(&pack_, &error)) << error.message;
-    ASSERT_EQ(runtime_.open(pack_, limits_for(path), &error), Status::kOk) << error.message;
+    RuntimeLimits limits = limits_for(path);
+    limits.max_pane_changes = max_pane_changes;
+    ASSERT_EQ(runtime_.open(pack_, limits, &error), Status::kOk) << error.message;
     ASSERT_EQ(runtime_.path(), path) << path_name(runtime_.path());
   }
   int settle(uint64_t budget, int max_frames = 100000) {
@@ -546,6 +550,156 @@ TEST_F(Gles, QueriesByNameAndRejectsBadValues) {
 #else
   EXPECT_DEATH(runtime_.set_light_on(99, true), "out of range");
 #endif
+}
+
+// Moving lights (runtime.h, "Moving lights"): a pack with 2 static-switchable lights, one moving
+// lantern and `panes` panes.
+SyntheticOptions lantern_options(uint32_t panes, bool spot = false) {
+  SyntheticOptions o;
+  o.seed = 31;
+  o.lights = 2;
+  o.objects = 2;
+  o.moving_lights = 1;
+  o.panes = panes;
+  o.moving_spot = spot;
+  return o;
+}
+
+// The lantern's pose at step i of a walk around the room, aimed at the panes' corner.
+LightPose lantern_pose(int i) {
+  const float a = 0.17f * float(i);
+  LightPose p{{1.4f * std::cos(a) - 0.4f, 0.5f + 0.04f * float(i % 9), 1.1f * std::sin(a)}, {}};
+  const float aim[3] = {-1.8f - p.position[0], 0.3f - p.position[1], -1.0f - p.position[2]};
+  const float n = std::sqrt(aim[0] * aim[0] + aim[1] * aim[1] + aim[2] * aim[2]);
+  for (int c = 0; c < 3; ++c) p.direction[c] = aim[c] / n;
+  return p;
+}
+
+// 50 poses, every pane pushed each frame (max_pane_changes above the pane count): after each
+// settle the map equals the CPU reference recomposer of the same state (whose panes follow
+// SceneState::light_factor) within the GLES bar used above.
+TEST_F(Gles, MovingLightWalkAgreesWithTheCpuReference) {
+  for (bool spot : {false, true}) {
+    open(lantern_options(12, spot), RecomposePath::kGpuFloat, 1000);
+    const uint32_t lantern = pack_.moving_light(0).light;
+    Error error;
+    SceneState state;
+    ASSERT_EQ(state.init(pack_, &error), Status::kOk);
+    CpuRecomposer cpu;
+    ASSERT_EQ(cpu.init(pack_, &error), Status::kOk);
+    settle(kUnlimited);
+    double worst_seen = 0.0;
+    uint32_t most_pushed = 0;
+    for (int i = 0; i < 50; ++i) {
+      const LightPose pose = lantern_pose(i);
+      ASSERT_EQ(state.set_light_pose(lantern, pose), Status::kOk);
+      ASSERT_EQ(runtime_.set_light_pose(lantern, pose), Status::kOk);
+      if (i == 30) {  // the lantern's colour: every pane's factor follows it
+        const float rgb[3] = {0.2f, 0.9f, 0.4f};
+        ASSERT_EQ(state.set_light_color(lantern, rgb), Status::kOk);
+        ASSERT_EQ(runtime_.set_light_color(lantern, rgb), Status::kOk);
+      }
+      ASSERT_EQ(runtime_.update(kUnlimited), Status::kOk);
+      most_pushed = std::max(most_pushed, runtime_.stats().pane_changes);
+      settle(kUnlimited);
+      ASSERT_EQ(cpu.apply(state), Status::kOk);
+      const std::vector<float> got = read();
+      std::vector<double> magnitude;
+      wanted(&magnitude);
+      const std::vector<double> want(cpu.presented_maps(), cpu.presented_maps() + got.size());
+      const double w = worst(got, want, magnitude, 1.0, runtime_.stats().error_bound);
+      worst_seen = std::max(worst_seen, w);
+      ASSERT_LE(w, 1.0) << "pose " << i << (spot ? " spot" : " point");
+    }
+    std::printf("[ moving ] %s walk: worst %.3f of the bar, up to %u panes pushed a frame\n",
+                spot ? "spot" : "point", worst_seen, most_pushed);
+    EXPECT_GT(most_pushed, 1u);
+    // A pane takes no setter; poses only for the lantern.
+    EXPECT_EQ(runtime_.set_light_on(pack_.pane(0).light, false), Status::kInvalidArgument);
+    EXPECT_EQ(runtime_.set_light_pose(0, lantern_pose(0)), Status::kInvalidArgument);
+    EXPECT_EQ(runtime_.light_pose(lantern).position[0], lantern_pose(49).position[0]);
+  }
+}
+
+// The default limits (16 panes a frame, tolerance 1/256) on 40 panes: while the lantern walks each
+// frame pushes at most 16; once it stops the panes reach their targets exactly within
+// ceil(40 / 16) = 3 frames, and the map equals the CPU reference.
+TEST_F(Gles, MovingLightConvergesWithTheDefaultLimitsOnceItStops) {
+  open(lantern_options(40), RecomposePath::kGpuFloat);
+  const uint32_t lantern = pack_.moving_light(0).light;
+  Error error;
+  SceneState state;
+  ASSERT_EQ(state.init(pack_, &error), Status::kOk);
+  settle(kUnlimited);
+  uint32_t most_pushed = 0, most_pending = 0;
+  for (int i = 0; i < 30; ++i) {
+    const LightPose pose = lantern_pose(i);
+    ASSERT_EQ(state.set_light_pose(lantern, pose), Status::kOk);
+    ASSERT_EQ(runtime_.set_light_pose(lantern, pose), Status::kOk);
+    ASSERT_EQ(runtime_.update(kUnlimited), Status::kOk);
+    most_pushed = std::max(most_pushed, runtime_.stats().pane_changes);
+    most_pending = std::max(most_pending, runtime_.stats().pane_pending);
+  }
+  EXPECT_LE(most_pushed, 16u);
+  EXPECT_GT(most_pending, 0u);  // 40 panes moving: more than a frame's worth off target
+  // Stopped: the same pose again is no change.
+  ASSERT_EQ(runtime_.set_light_pose(lantern, lantern_pose(29)), Status::kOk);
+  int frames = 0;
+  while (!runtime_.idle() && frames < 100) {
+    ASSERT_EQ(runtime_.update(kUnlimited), Status::kOk);
+    ++frames;
+  }
+  std::printf(
+      "[ moving ] stopped lantern: idle after %d frames (40 panes, 16 a frame; up to %u "
+      "pending while it walked)\n",
+      frames, most_pending);
+  EXPECT_LE(frames, 3 + 1);  // ceil(40 / 16) frames of pushes; the last one's changes shown
+  EXPECT_EQ(runtime_.stats().pane_pending, 0u);
+  for (uint32_t k = 0; k < pack_.pane_count(); ++k) {
+    float want[3];
+    state.light_factor(pack_.pane(k).light, want);
+    const LightState have = runtime_.light(pack_.pane(k).light);
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(have.color[c], want[c]) << "pane " << k;
+  }
+  CpuRecomposer cpu;
+  ASSERT_EQ(cpu.init(pack_, &error), Status::kOk);
+  ASSERT_EQ(cpu.rebuild(state), Status::kOk);
+  const std::vector<float> got = read();
+  std::vector<double> magnitude;
+  wanted(&magnitude);
+  const std::vector<double> want(cpu.presented_maps(), cpu.presented_maps() + got.size());
+  EXPECT_LE(worst(got, want, magnitude, 1.0, runtime_.stats().error_bound), 1.0);
+}
+
+TEST_F(Gles, MovingLightUpdatesAllocateNothing) {
+  for (RecomposePath path : {RecomposePath::kGpuFloat, RecomposePath::kCpu}) {
+    open(lantern_options(40, true), path);
+    const uint32_t lantern = pack_.moving_light(0).light;
+    settle(kUnlimited);
+    std::vector<LightPose> poses(300);
+    for (int i = 0; i < 300; ++i) poses[size_t(i)] = lantern_pose(i);
+    for (int i = 0; i < 20; ++i) {  // warm the driver
+      runtime_.set_light_pose(lantern, poses[size_t(i)]);
+      ASSERT_EQ(runtime_.update(2000), Status::kOk);
+    }
+    testing::Counters& c = testing::counters();
+    c.news = c.mallocs = c.gl_creations = 0;
+    c.on = true;
+    uint32_t pushed = 0;
+    for (int i = 20; i < 300; ++i) {
+      runtime_.set_light_pose(lantern, poses[size_t(i)]);
+      if (i % 50 == 0) runtime_.set_light_intensity(lantern, float(i % 7));
+      runtime_.update(i % 3 == 0 ? 700 : 5000);
+      pushed += runtime_.stats().pane_changes;
+    }
+    c.on = false;
+    EXPECT_GT(pushed, 100u);
+    EXPECT_EQ(c.gl_creations, 0u) << path_name(path);
+    EXPECT_EQ(c.news, 0u) << path_name(path);
+    if (testing::malloc_counted()) {
+      EXPECT_EQ(c.mallocs, 0u) << path_name(path);
+    }
+  }
 }
 
 }  // namespace

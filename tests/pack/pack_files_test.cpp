@@ -1,4 +1,4 @@
-// The committed test packs stay true to the cooker; golden bytes of format version 4; hostile
+// The committed test packs stay true to the cooker; golden bytes of format version 5; hostile
 // packs (truncated, bytes flipped) are refused cleanly or stay safe to use (run under ASan).
 #include <gtest/gtest.h>
 
@@ -23,9 +23,9 @@ namespace {
 using test::Aligned;
 using test::fix_checksum;
 
-// Golden values of tiny.lpk (format version 4).
+// Golden values of tiny.lpk (format version 5).
 constexpr uint64_t kTinySize = 1984;
-constexpr uint32_t kTinyCrc = 0xac8899ffu;
+constexpr uint32_t kTinyCrc = 0x1ce6b09au;
 
 std::string data_path(const std::string& name) {
   return std::string(LIGHTPATCH_TEST_DATA_DIR) + "/packs/" + name;
@@ -54,13 +54,13 @@ TEST(PackFiles, CommittedPacksMatchTheCooker) {
   check_committed("tiny.lpk", test::build_tiny_pack());
 }
 
-TEST(PackFiles, GoldenBytesOfVersion4) {
+TEST(PackFiles, GoldenBytesOfVersion5) {
   const std::vector<uint8_t> b = test::build_tiny_pack();
   ASSERT_GE(b.size(), 64u);
   EXPECT_EQ(std::memcmp(b.data(), "LPK1", 4), 0);
   uint32_t version;
   std::memcpy(&version, b.data() + 4, 4);
-  EXPECT_EQ(version, 4u);
+  EXPECT_EQ(version, 5u);
   uint64_t file_size;
   std::memcpy(&file_size, b.data() + 8, 8);
   EXPECT_EQ(file_size, b.size());
@@ -72,6 +72,15 @@ TEST(PackFiles, GoldenBytesOfVersion4) {
   EXPECT_EQ(offsetof(pack::MeshRecord, object), 40u);
   EXPECT_EQ(offsetof(pack::MeshRecord, lightmap_scale_offset), 48u);
   EXPECT_EQ(sizeof(pack::MeshRecord), 64u);
+  // Version 5: LightRecord::flags (was reserved), the moving-light and pane records.
+  EXPECT_EQ(offsetof(pack::LightRecord, flags), 28u);
+  EXPECT_EQ(sizeof(pack::MovingLightRecord), 48u);
+  EXPECT_EQ(offsetof(pack::MovingLightRecord, radius), 40u);
+  EXPECT_EQ(sizeof(pack::PaneRecord), 744u);
+  EXPECT_EQ(offsetof(pack::PaneRecord, points), 40u);
+  EXPECT_EQ(offsetof(pack::PaneRecord, depth), 232u);
+  EXPECT_EQ(uint32_t(pack::kSectionMovingLights), 14u);
+  EXPECT_EQ(uint32_t(pack::kSectionPanes), 15u);
   // The whole file: any change to the writer, the quantizer or the packer shows here.
   EXPECT_EQ(b.size(), kTinySize);
   EXPECT_EQ(crc32(b.data(), b.size()), kTinyCrc);
@@ -220,6 +229,12 @@ TEST(PackFiles, AtlasSidesAndVersionAreCheckedOnLoad) {
       << e.message;
   EXPECT_EQ(open_edited(offsetof(pack::Header, version), 3u, &e), Status::kUnsupportedVersion);
   EXPECT_NE(std::string(e.message).find("cook the scene again"), std::string::npos) << e.message;
+  // Version 4 (before moving lights) likewise.
+  EXPECT_EQ(open_edited(offsetof(pack::Header, version), 4u, &e), Status::kUnsupportedVersion);
+  EXPECT_NE(std::string(e.message).find("version 4 is not supported (this reader: 5); cook the "
+                                        "scene again"),
+            std::string::npos)
+      << e.message;
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "lightpatch/moving_lights.h"
 #include "lightpatch/pack_format.h"
 #include "lightpatch/pack_view.h"
 
@@ -60,6 +61,25 @@ struct SyntheticOptions {
   std::function<void(const pack::ProbeRecord& probe, const pack::ProbeSetRecord& set,
                      float sh[pack::kProbeShCount * 3])>
       probe_sh;
+  // Moving lights (pack_format.h, "Moving lights"): moving_lights lights flagged moving after the
+  // `lights` ones (spots where moving_spot; named moving_<k>, colour (1, 0.8, 0.6), intensity
+  // 2 + k, at (0.3 k, 1.5, 0.2) shining down), then `panes` pane lights, each with one
+  // contribution group (random patches like the lights'). Pane k lies on the floor (y = 0, normal
+  // +Y; even k) or the wall x = -2 (normal +X; odd k), its eye on a grid, 1 + k % 8 entry points
+  // around it, radius 0.25, depth range 8, depth texels from pane_depth (default 65535: nothing).
+  // The panes' authored colours are their factors for the authored poses (moving_lights.h).
+  uint32_t moving_lights = 0;
+  uint32_t panes = 0;
+  bool moving_spot = false;
+  float moving_range = 0.0f;
+  std::function<uint16_t(uint32_t pane, uint32_t x, uint32_t y)> pane_depth;
+  // Refusal tests: a contribution group for moving light 0; a shadow group of pane 0 by object 0.
+  bool moving_light_group = false;
+  bool pane_shadow_group = false;
+  // Edits the light, moving-light and pane records before the table checksum is computed.
+  std::function<void(std::vector<pack::LightRecord>&, std::vector<pack::MovingLightRecord>&,
+                     std::vector<pack::PaneRecord>&)>
+      mutate_moving;
   // Leaves this section type out of the index (0: none), for refusal tests.
   uint32_t drop_section = 0;
   // Edits the probe records before the table checksum is computed.
@@ -123,6 +143,74 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     strings += name;
     objects.push_back(r);
   }
+  // Moving lights and panes after the others (no random draws: packs without them are unchanged).
+  std::vector<MovingLightRecord> moving;
+  std::vector<PaneRecord> panes;
+  const uint32_t first_moving = o.lights, first_pane = o.lights + o.moving_lights;
+  for (uint32_t k = 0; k < o.moving_lights; ++k) {
+    const std::string name = "moving_" + std::to_string(k);
+    LightRecord r{};
+    r.name_offset = uint32_t(strings.size());
+    r.name_length = uint32_t(name.size());
+    strings += name;
+    r.color[0] = 1.0f;
+    r.color[1] = 0.8f;
+    r.color[2] = 0.6f;
+    r.intensity = 2.0f + float(k);
+    r.type = o.moving_spot ? kLightSpot : kLightPoint;
+    r.flags = kLightFlagMoving;
+    lights.push_back(r);
+    MovingLightRecord m{};
+    m.light = first_moving + k;
+    m.position[0] = 0.3f * float(k);
+    m.position[1] = 1.5f;
+    m.position[2] = 0.2f;
+    m.direction[1] = -1.0f;
+    m.range = o.moving_range;
+    m.inner_cone = 0.3f;
+    m.outer_cone = 0.7f;
+    m.radius = 0.05f;
+    moving.push_back(m);
+  }
+  for (uint32_t k = 0; k < o.panes; ++k) {
+    PaneRecord p{};
+    p.light = first_pane + k;
+    const bool floor = k % 2 == 0;
+    const float a = float(k % 5) * 0.8f - 1.6f, b = float(k / 5) * 0.8f - 1.0f;
+    p.eye[0] = floor ? a : -2.0f;
+    p.eye[1] = floor ? 0.0f : 0.5f + 0.3f * float(k % 3);
+    p.eye[2] = b;
+    p.normal[floor ? 1 : 0] = 1.0f;
+    p.radius = 0.25f;
+    p.depth_range = 8.0f;
+    p.point_count = 1 + k % kMaxPanePoints;
+    for (uint32_t i = 0; i < p.point_count; ++i) {
+      PanePoint& pt = p.points[i];
+      const float du = 0.3f * float(int(i % 3) - 1), dv = 0.3f * float(int(i / 3) - 1);
+      pt.position[0] = p.eye[0] + (floor ? du : 0.0f);
+      pt.position[1] = p.eye[1] + (floor ? 0.0f : du);
+      pt.position[2] = p.eye[2] + dv;
+      std::memcpy(pt.normal, p.normal, sizeof pt.normal);
+    }
+    for (uint32_t y = 0; y < kPaneDepthSize; ++y)
+      for (uint32_t x = 0; x < kPaneDepthSize; ++x)
+        p.depth[y * kPaneDepthSize + x] = o.pane_depth ? o.pane_depth(k, x, y) : 0xFFFFu;
+    panes.push_back(p);
+  }
+  for (uint32_t k = 0; k < o.panes; ++k) {
+    LightRecord r{};
+    r.intensity = 1.0f;
+    r.type = kLightPane;
+    for (uint32_t m = 0; m < o.moving_lights; ++m) {  // the authored factor, as the runtime's
+      const float w =
+          pane_weight(moving[m], lights[first_moving + m].type, authored_pose(moving[m]), panes[k]);
+      for (int c = 0; c < 3; ++c)
+        r.color[c] += lights[first_moving + m].color[c] * lights[first_moving + m].intensity * w;
+    }
+    lights.push_back(r);
+  }
+  const uint32_t light_total = o.lights + o.moving_lights + o.panes;
+
   // Groups in sorted order: base, contributions, shadows, pairs.
   std::vector<GroupRecord> groups;
   auto add_group = [&](uint16_t kind, uint16_t light, uint16_t a, uint16_t b) {
@@ -131,12 +219,18 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   add_group(kGroupBase, kNone16, kNone16, kNone16);
   for (uint32_t l = 0; l < o.lights; ++l)
     add_group(kGroupContribution, uint16_t(l), kNone16, kNone16);
+  if (o.moving_light_group && o.moving_lights > 0)
+    add_group(kGroupContribution, uint16_t(first_moving), kNone16, kNone16);
+  for (uint32_t k = 0; k < o.panes; ++k)
+    add_group(kGroupContribution, uint16_t(first_pane + k), kNone16, kNone16);
   for (uint32_t l = 0; l < o.lights; ++l) {
     for (uint32_t a = 0; a < o.objects; ++a) {
       if (uniform(0, 1) < o.shadow_probability)
         add_group(kGroupShadow, uint16_t(l), uint16_t(a), kNone16);
     }
   }
+  if (o.pane_shadow_group && o.panes > 0 && o.objects > 0)
+    add_group(kGroupShadow, uint16_t(first_pane), 0, kNone16);
   for (uint32_t l = 0; l < o.lights; ++l) {
     for (uint32_t a = 0; a < o.objects; ++a) {
       for (uint32_t b = a + 1; b < o.objects; ++b) {
@@ -253,6 +347,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     // Sets in sorted order, from the map's groups (pair corrections have none).
     for (const GroupRecord& g : groups) {
       if (g.kind == kGroupPairCorrection) continue;
+      if (g.light != kNone16 && g.light >= o.lights) continue;  // moving lights, panes: none
       ProbeSetRecord set{g.kind, g.light, g.object_a, g.object_b, uint32_t(entries.size()), 0};
       for (uint32_t p = 0; p < probes.size(); ++p) {
         if (g.kind != kGroupBase && uniform(0, 1) >= o.probe_reach_probability) continue;
@@ -270,7 +365,10 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   }
 
   // Layout: header, index, then 256-aligned sections.
-  const uint32_t section_count = 7 + (with_probes ? 4 : 0) - (o.drop_section != 0 ? 1 : 0);
+  if (o.mutate_moving) o.mutate_moving(lights, moving, panes);
+  const bool with_moving = o.moving_lights > 0;
+  const uint32_t section_count =
+      7 + (with_probes ? 4 : 0) + (with_moving ? 2 : 0) - (o.drop_section != 0 ? 1 : 0);
   auto align = [](uint64_t v) {
     return (v + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
   };
@@ -298,6 +396,11 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     sets_at = place(kSectionProbeSets, sets.size() * sizeof(ProbeSetRecord));
     entries_at = place(kSectionProbeEntries, entries.size() * sizeof(ProbeEntry));
   }
+  uint64_t moving_at = 0, panes_at = 0;
+  if (with_moving) {
+    moving_at = place(kSectionMovingLights, moving.size() * sizeof(MovingLightRecord));
+    panes_at = place(kSectionPanes, panes.size() * sizeof(PaneRecord));
+  }
   std::vector<AtlasRecord> atlas_records;
   for (size_t a = 0; a < atlases.size(); ++a) {
     atlas_records.push_back(AtlasRecord{as, as, data_at + a * atlas_bytes});
@@ -310,7 +413,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   h.section_count = section_count;
   h.lightmap_width = o.width;
   h.lightmap_height = o.height;
-  h.light_count = o.lights;
+  h.light_count = light_total;
   h.object_count = o.objects;
   h.group_count = uint32_t(groups.size());
   h.patch_count = uint32_t(patches.size());
@@ -341,6 +444,10 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     }
     put(sets_at, sets.data(), sets.size() * sizeof(ProbeSetRecord));
     put(entries_at, entries.data(), entries.size() * sizeof(ProbeEntry));
+  }
+  if (with_moving) {
+    put(moving_at, moving.data(), moving.size() * sizeof(MovingLightRecord));
+    put(panes_at, panes.data(), panes.size() * sizeof(PaneRecord));
   }
   put(sizeof(Header), index.data(), index.size() * sizeof(SectionEntry));
 

@@ -94,6 +94,7 @@ float percentile_step(const BakeContext& b, bool authored) {
       glm::vec3 e(0.0f);
       for (const Light& l : b.scene.lights) {
         if (!authored && !l.semi_dynamic) continue;
+        if (l.moving) continue;  // its direct light is the game's, not the maps'
         const glm::vec3 c = authored ? l.color * l.intensity : glm::vec3(1.0f);
         e += c * punctual_irradiance(l, l.position, texels.position[t], texels.normal[t], eps2);
       }
@@ -209,20 +210,22 @@ uint64_t BakeContext::texel_rng(size_t texel, int slot) const {
   return sample_hash(options.seed, texel, static_cast<uint64_t>(slot), 0);
 }
 
-void BakeContext::light_samples(int li, size_t t, std::vector<LightSample>& out) const {
+void BakeContext::light_samples(int li, size_t t, std::vector<LightSample>& out,
+                                const Light* posed) const {
   const LightPlan& p = lights[static_cast<size_t>(li)];
-  sample_punctual(scene.lights[static_cast<size_t>(li)], texels.position[t], texels.normal[t],
-                  p.samples, texel_rng(t, li + 1), eps, extent, p.cutoff, out, footprint(t),
-                  texel_samples);
+  sample_punctual(posed ? *posed : scene.lights[static_cast<size_t>(li)], texels.position[t],
+                  texels.normal[t], p.samples, texel_rng(t, li + 1), eps, extent, p.cutoff, out,
+                  footprint(t), texel_samples);
 }
 
 namespace {
 constexpr uint64_t kPenumbraSalt = 0x70656e756d627261ull;  // "penumbra"
 }  // namespace
 
-bool BakeContext::penumbra_light_samples(int li, size_t t, std::vector<LightSample>& out) const {
+bool BakeContext::penumbra_light_samples(int li, size_t t, std::vector<LightSample>& out,
+                                         const Light* posed) const {
   const LightPlan& p = lights[static_cast<size_t>(li)];
-  const Light& light = scene.lights[static_cast<size_t>(li)];
+  const Light& light = posed ? *posed : scene.lights[static_cast<size_t>(li)];
   const TexelFootprint* f = footprint(t);
   const bool sized = light.type != LightType::kDirectional && light.radius > 0.0f;
   if (!f && !sized) return false;
@@ -243,9 +246,10 @@ constexpr uint64_t kPointSalt = 0x706f696e74ull;  // "point"
 }  // namespace
 
 void BakeContext::point_light_samples(const DirectPoints& pts, int li, size_t i,
-                                      std::vector<LightSample>& out) const {
+                                      std::vector<LightSample>& out, const Light* posed) const {
   const LightPlan& p = lights[static_cast<size_t>(li)];
-  sample_punctual(scene.lights[static_cast<size_t>(li)], pts.position[i], pts.normal[i], 1,
+  sample_punctual(posed ? *posed : scene.lights[static_cast<size_t>(li)], pts.position[i],
+                  pts.normal[i], 1,
                   sample_hash(options.seed, i, static_cast<uint64_t>(li + 1), kPointSalt), eps,
                   extent, p.cutoff, out);
 }

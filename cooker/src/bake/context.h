@@ -68,20 +68,23 @@ struct BakeContext {
   std::unique_ptr<IndirectIntegrator> indirect;
 
   uint64_t texel_rng(size_t texel, int slot) const;
-  // Shadow samples of scene light `li` (intensity 1, white) at texel t.
-  void light_samples(int li, size_t t, std::vector<LightSample>& out) const;
+  // Shadow samples of scene light `li` (intensity 1, white) at texel t. `posed`, if not null, is
+  // that light moved (a moving light at a state's pose): the same random numbers, its position.
+  void light_samples(int li, size_t t, std::vector<LightSample>& out,
+                     const Light* posed = nullptr) const;
   // For a texel in a penumbra of light `li` (is_penumbra of its light_samples): a set
   // kPenumbraFactor times denser, in directions and in points of the texel's patch, with random
   // numbers of its own, that replaces them. False (nothing written) where there is nothing denser
   // to draw: one point per texel and a light without a size.
-  bool penumbra_light_samples(int li, size_t t, std::vector<LightSample>& out) const;
+  bool penumbra_light_samples(int li, size_t t, std::vector<LightSample>& out,
+                              const Light* posed = nullptr) const;
   void emissive_samples(size_t t, std::vector<LightSample>& out) const;
   // The same for point i of the integrator's DirectPoints `pts`: a point, not a texel's patch,
   // and one shadow ray per light (a sphere light: to its centre, with its exact unshadowed
   // irradiance) and one emissive sample: each point stands for a few gather rays, which average
   // them.
-  void point_light_samples(const DirectPoints& pts, int li, size_t i,
-                           std::vector<LightSample>& out) const;
+  void point_light_samples(const DirectPoints& pts, int li, size_t i, std::vector<LightSample>& out,
+                           const Light* posed = nullptr) const;
   void point_emissive_samples(const DirectPoints& pts, size_t i,
                               std::vector<LightSample>& out) const;
   std::string light_name(int li) const;

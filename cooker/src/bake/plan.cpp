@@ -186,7 +186,8 @@ BakePlan make_plan(const BakeContext& b) {
 
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     const Light& l = scene.lights[i];
-    if (!l.semi_dynamic) continue;
+    // A moving light has no maps of its own: its bounce light is the panes' (bake_panes).
+    if (!l.semi_dynamic || l.moving) continue;
     LightGroup g;
     g.light = int(i);
     g.name = b.light_name(int(i));

@@ -200,7 +200,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
   std::vector<GroupBake> groups;
   for (size_t g = 0; g < session.plan().groups.size(); ++g)
     groups.push_back(session.bake_group(g, progress, report));
-  return session.assemble(std::move(groups), report);
+  BakedMaps maps = session.assemble(std::move(groups), report);
+  session.bake_panes(maps, progress, report);
+  return maps;
 }
 
 FloatImage bake_state(const Scene& scene, const Layout& layout, const TexelSet& texels,

@@ -140,6 +140,7 @@ GroupBake CookJobs::run(size_t i, Progress& progress, Report& report) const {
 std::vector<uint8_t> CookJobs::assemble(std::vector<GroupBake> results, Progress& progress,
                                         Report& report, BakedMaps* maps_out) const {
   BakedMaps maps = session_->assemble(std::move(results), report);
+  session_->bake_panes(maps, progress, report);
   finalize_maps(maps, p_, progress, report);
   const ProbeBake probes = cook_probes(p_, maps, bake_, progress, report);
   progress.begin("pack", 1);

@@ -63,7 +63,7 @@ JobHash hash_of(const std::string& name) {
 // Every option is stored (threads aside): an option added to these structs must be added here and
 // to settings_from_json, or a job would run with its default. (Sizes on 64-bit Linux.)
 static_assert(sizeof(LayoutOptions) == 28, "LayoutOptions changed: update job_dir.cpp");
-static_assert(sizeof(BakeOptions) == 88, "BakeOptions changed: update job_dir.cpp");
+static_assert(sizeof(BakeOptions) == 96, "BakeOptions changed: update job_dir.cpp");
 static_assert(sizeof(ImportLimits) == 48, "ImportLimits changed: update job_dir.cpp");
 
 json settings_json(const CookSettings& s) {
@@ -92,6 +92,8 @@ json settings_json(const CookSettings& s) {
           {"probes", b.probes.enabled},
           {"probe_spacing", b.probes.spacing},
           {"probe_rays", b.probes.rays},
+          {"panes", b.panes},
+          {"moving_direct", b.moving_direct},
           {"max_triangles", s.import.max_triangles},
           {"max_vertices", s.import.max_vertices},
           {"max_texture_pixels", s.import.max_texture_pixels},
@@ -155,6 +157,8 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   if (!(s.bake.probes.spacing >= 0.0f && s.bake.probes.spacing <= 1e30f))
     throw CookError(file + ": \"probe_spacing\" out of range");
   s.bake.probes.rays = int_field(j, "probe_rays", 0, 1 << 20, file);
+  s.bake.panes = int_field(j, "panes", 0, kMaxPaneOption, file);
+  s.bake.moving_direct = field<bool>(j, "moving_direct", file);
   s.import.max_triangles = field<uint64_t>(j, "max_triangles", file);
   s.import.max_vertices = field<uint64_t>(j, "max_vertices", file);
   s.import.max_texture_pixels = field<uint64_t>(j, "max_texture_pixels", file);

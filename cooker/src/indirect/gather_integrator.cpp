@@ -57,9 +57,11 @@ DirectPoints direct_points_of(const GatherOperator& op, const TexelSet& texels) 
   pts.position.resize(n);
   pts.normal.resize(n);
   pts.index.resize(n);
+  pts.texel.resize(n);
   for (size_t p = 0; p < n; ++p) {
     const NearHit& h = op.near[keyed[p].second];
     pts.index[p] = keyed[p].second;
+    pts.texel[p] = h.fine;
     pts.position[p] = h.point;
     pts.normal[p] = texels.normal[h.fine];  // the shading normal where it lands
   }

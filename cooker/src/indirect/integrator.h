@@ -52,6 +52,7 @@ struct DirectPoints {
   int width = kWidth, height = 0;
   std::vector<glm::vec3> position, normal;  // one per point
   std::vector<uint32_t> index;              // point -> the integrator's own entry
+  std::vector<uint32_t> texel;              // point -> the light-map texel it lies on
   size_t size() const { return position.size(); }
 };
 

@@ -5,13 +5,15 @@
 //
 //   L = B + sum_l f_l * SC_l,   SC_l = C_l - sum_{o visible} S_ol + sum_{a<b visible} P_lab
 //
-// with f_l = on * colour * intensity (SceneState::light_factor). light_map() is the presented map:
-// the accumulator rounded to float and clamped at zero (light is never negative; planner.h says
-// why quantization can leave a few steps below zero under a visible object). A pack with an
-// indirect map has a second accumulator and presented map at its own resolution
-// (indirect_map()); both are presented signed (PackView::presents_signed()), and rgb() is what a
-// game lights with: max(L + I, 0), the indirect map magnified bilinearly (indirect_map.h),
-// computed after each rebuild()/apply(); without an indirect map rgb() is the light map itself.
+// with f_l = on * colour * intensity (SceneState::light_factor); a pane's f_l is its factor from
+// the state's moving lights (moving_lights.h), set in full on every rebuild()/apply(). light_map()
+// is the presented map: the accumulator rounded to float and clamped at zero (light is never
+// negative; planner.h says why quantization can leave a few steps below zero under a visible
+// object). A pack with an indirect map has a second accumulator and presented map at its own
+// resolution (indirect_map()); both are presented signed (PackView::presents_signed()), and rgb()
+// is what a game lights with: max(L + I, 0), the indirect map magnified bilinearly
+// (indirect_map.h), computed after each rebuild()/apply(); without an indirect map rgb() is the
+// light map itself.
 //
 // Memory: everything is allocated in init(); rebuild() and apply() allocate nothing. The pack's
 // bytes must outlive the recomposer.

@@ -1,4 +1,4 @@
-// lightpatch pack format, version 4: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 5: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -24,6 +24,8 @@
 //   kProbeGrid   (optional, with kProbes) ProbeGridRecord, then uint32 probe index per grid point
 //   kProbeSets   (with kProbes) ProbeSetRecord[]               contiguous entry ranges per owner
 //   kProbeEntries (with kProbes) ProbeEntry[]                  sorted by set
+//   kMovingLights (optional) MovingLightRecord[]               one per light flagged moving
+//   kPanes       (with kMovingLights) PaneRecord[]             one per light of type kLightPane
 //
 // Table checksum: CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320) over the bytes of the section
 // index and of every section except kAtlasData and kMeshData, in index order, with the header's
@@ -71,6 +73,23 @@
 // of a surface facing n (same units as the patches). Probes on a regular grid (kProbeGrid) are
 // blended trilinearly, leaving out a corner the query point cannot reach along the axes within
 // the probe's reach (a wall between them).
+//
+// Moving lights (docs/moving_lights.md; precomputed radiance maps, Szecsi & Szirmay-Kalos): a
+// light whose LightRecord has kLightFlagMoving may be moved by the game. Its direct light is the
+// game's (a dynamic light); the pack holds its bounce light as a sum over panes. A pane is a
+// patch of static surface (clustered texels, close and alike in orientation); its light is a
+// pseudo-light of type kLightPane in the light table, with one contribution group holding the
+// bounce light everywhere when the pane's texels receive irradiance 1 (grey). The runtime sets
+// each pane's factor to the irradiance the moving lights give it,
+//   f_pane = sum over moving lights m (on) of colour_m * intensity_m * w(m, pane)
+//   w(m, pane) = V(m, pane) * (1/M) * sum_i E(m, x_i, n_i)
+// over the pane's M entry points (x_i, n_i), with E the KHR_lights_punctual irradiance of a unit
+// light at the light's pose (spot cone and range window as the cooker's direct light) with the
+// squared distance floored at the pane's radius squared, and V the pane's visibility of the
+// light's position (PaneRecord: a hemispherical depth map from the pane's eye, filtered). The
+// pane lights' authored colour is that factor for the moving lights' authored poses and
+// states (intensity 1), so the authored state of every light is consistent. Pane lights have no
+// name, no shadow, pair-correction or probe set; moving lights have no group and no probe set.
 #pragma once
 
 #include <cstddef>
@@ -83,8 +102,9 @@ constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 
 // offset (kMeshFlagTexcoord1). Version 3: atlas sides are multiples of kAtlasAlign, no longer
 // powers of two (a version 2 reader would call such a pack corrupt), and patches touch in the
 // atlas (no gutter); a 1-channel patch may draw into one map channel (kFlagDestinationMask).
-// Version 4: light probes (sections 10-13). A reader accepts its own version only.
-constexpr uint32_t kVersion = 4;
+// Version 4: light probes (sections 10-13). Version 5: moving lights and their panes (sections
+// 14-15, LightRecord::flags, kLightPane). A reader accepts its own version only.
+constexpr uint32_t kVersion = 5;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
@@ -105,8 +125,10 @@ enum SectionType : uint32_t {
   kSectionProbeGrid = 11,
   kSectionProbeSets = 12,
   kSectionProbeEntries = 13,
+  kSectionMovingLights = 14,
+  kSectionPanes = 15,
 };
-constexpr uint32_t kSectionTypeMax = 13;
+constexpr uint32_t kSectionTypeMax = 15;
 
 struct Header {
   uint32_t magic;            // kMagic
@@ -147,22 +169,35 @@ static_assert(sizeof(SectionEntry) == 24);
 static_assert(offsetof(SectionEntry, offset) == 8);
 static_assert(offsetof(SectionEntry, length) == 16);
 
-enum LightType : uint32_t { kLightPoint = 0, kLightSpot = 1, kLightDirectional = 2 };
+// kLightPane: a moving lights' pane (see "Moving lights" above), not a light of the scene.
+enum LightType : uint32_t {
+  kLightPoint = 0,
+  kLightSpot = 1,
+  kLightDirectional = 2,
+  kLightPane = 3
+};
+
+enum LightFlags : uint32_t {
+  // The light moves (point or spot only): it has no group; its bounce light is the panes'.
+  kLightFlagMoving = 1u << 0,
+};
 
 // A semi-dynamic light. Its contribution patches were baked for colour (1,1,1) and intensity 1
-// (candela for point/spot, lux for directional).
+// (candela for point/spot, lux for directional). A pane (kLightPane) has name_length 0, no
+// flags, and its factor is set by the runtime from the moving lights (colour: the authored one).
 struct LightRecord {
-  uint32_t name_offset;  // into kStrings
-  uint32_t name_length;  // bytes, > 0
+  uint32_t name_offset;  // into kStrings (0 for a pane)
+  uint32_t name_length;  // bytes, > 0 (0 for a pane)
   float color[3];        // authored linear RGB, finite, >= 0
-  float intensity;       // authored intensity, finite, >= 0
+  float intensity;       // authored intensity, finite, >= 0 (1 for a pane)
   uint32_t type;         // LightType
-  uint32_t reserved;     // 0
+  uint32_t flags;        // LightFlags; unknown bits are zero
 };
 static_assert(sizeof(LightRecord) == 32);
 static_assert(offsetof(LightRecord, color) == 8);
 static_assert(offsetof(LightRecord, intensity) == 20);
 static_assert(offsetof(LightRecord, type) == 24);
+static_assert(offsetof(LightRecord, flags) == 28);
 
 // A semi-dynamic object (a glTF mesh node marked semiDynamic).
 struct ObjectRecord {
@@ -353,5 +388,68 @@ struct ProbeEntry {
 };
 static_assert(sizeof(ProbeEntry) == 112);
 static_assert(offsetof(ProbeEntry, sh) == 4);
+
+// A moving light's authored pose and shape (the light's own LightRecord has kLightFlagMoving and
+// type kLightPoint or kLightSpot). Sorted by light, each moving light exactly once.
+struct MovingLightRecord {
+  uint32_t light;      // index into kLights
+  float position[3];   // authored, world space, metres, finite
+  float direction[3];  // authored unit vector the light shines along (spots), finite
+  float range;         // metres, finite, >= 0; 0 = infinite (KHR_lights_punctual)
+  float inner_cone;    // radians, finite, 0 <= inner <= outer (spots)
+  float outer_cone;    // radians, finite, 0 < outer <= pi/2 (spots)
+  float radius;        // metres, finite, >= 0 (its sphere; the weights treat it as a point)
+  uint32_t reserved;   // 0
+};
+static_assert(sizeof(MovingLightRecord) == 48);
+static_assert(offsetof(MovingLightRecord, range) == 28);
+static_assert(offsetof(MovingLightRecord, radius) == 40);
+
+constexpr uint32_t kMaxPanePoints = 8;
+constexpr uint32_t kPaneDepthSize = 16;  // the depth map is kPaneDepthSize^2 texels
+constexpr uint32_t kMaxPanes = 4096;
+
+struct PanePoint {
+  float position[3];  // world space, metres, finite
+  float normal[3];    // unit, finite
+};
+static_assert(sizeof(PanePoint) == 24);
+
+// One pane of the moving lights. Its visibility of a light at L: with d = L - eye, if
+// dot(d, normal) <= 0 it is 0; otherwise d in the pane's frame (t, b, normal), t and b from
+// orthonormal_basis() below, maps to the hemi-octahedral square
+//   (p, q) = (d.t, d.b) / (|d.t| + |d.b| + d.n),  (s, r) = (p + q, p - q) in [-1, 1]^2
+//   texel coordinates (u, v) = ((s + 1) / 2 * N - 0.5, (r + 1) / 2 * N - 0.5),  N = kPaneDepthSize
+// and V is the bilinear blend (weights of the 4 texels around (u, v), clamped to the map's edge)
+// of [|d| <= depth_i] where depth_i = depth[y * N + x] / 65535 * depth_range: the distance from
+// the eye to the first static surface along texel (x, y)'s centre direction (65535: none within
+// depth_range, visible at any distance). Sorted by light, each pane light exactly once.
+struct PaneRecord {
+  uint32_t light;        // index into kLights (a kLightPane)
+  float eye[3];          // world space, metres, finite: where the depth map looks from
+  float normal[3];       // unit, finite: the pane's orientation (the hemisphere's axis)
+  float radius;          // metres, finite, > 0: the pane's extent (floors squared distances)
+  float depth_range;     // metres, finite, > 0
+  uint32_t point_count;  // entry points, 1..kMaxPanePoints (unused ones are zero)
+  PanePoint points[kMaxPanePoints];
+  uint16_t depth[kPaneDepthSize * kPaneDepthSize];
+};
+static_assert(sizeof(PaneRecord) == 744);
+static_assert(offsetof(PaneRecord, points) == 40);
+static_assert(offsetof(PaneRecord, depth) == 232);
+
+// The pane frame's tangents from its unit normal n (Duff et al. 2017, "Building an orthonormal
+// basis, revisited"): the cooker's depth maps and the runtime's lookups use this one function.
+inline void orthonormal_basis(const float n[3], float t[3], float b[3]) {
+  const float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
+  const float a = -1.0f / (sign + n[2]);
+  const float c = n[0] * n[1] * a;
+  t[0] = 1.0f + sign * n[0] * n[0] * a;
+  t[1] = sign * c;
+  t[2] = -sign * n[0];
+  b[0] = c;
+  b[1] = sign + n[1] * n[1] * a;
+  b[2] = -n[1];
+}
 
 }  // namespace lightpatch::pack

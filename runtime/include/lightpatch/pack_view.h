@@ -19,6 +19,12 @@
 // and kProbeEntries (all three or none; kProbeGrid only with them); at most kMaxProbes probes and
 // kMaxProbeGridPoints grid points; every probe set keyed like a group (never a pair correction),
 // sorted, its entries contiguous and ascending by probe, every SH coefficient finite. The view
+// Moving lights (optional sections, pack_format.h "Moving lights"): kMovingLights comes with
+// kPanes (both or none; the panes section may be empty); every light flagged kLightFlagMoving (a
+// point or spot light) has exactly one MovingLightRecord and every kLightPane light exactly one
+// PaneRecord, both sorted by light; a pane light has no name, no flags, intensity 1 and at most
+// its one contribution group (none: it draws nothing); moving lights have no group; neither has
+// a probe set. Unit vectors are within 1e-3 of length 1; unused entry points are zero. The view
 // never copies or owns the bytes: the caller keeps the memory alive and unchanged while the view is
 // used. No exceptions, no allocation.
 #pragma once
@@ -131,7 +137,7 @@ class PackView {
   const pack::MeshVertex* mesh_vertices(uint32_t i) const;
   const uint32_t* mesh_indices(uint32_t i) const;
 
-  // Index of the light/object with this name, or -1.
+  // Index of the light/object with this name, or -1 (a pane, unnamed, is never found).
   int32_t find_light(const char* name, uint32_t length) const;
   int32_t find_object(const char* name, uint32_t length) const;
 
@@ -154,6 +160,22 @@ class PackView {
   uint64_t probe_bytes() const { return probe_bytes_; }
   // Index of the named probe, or -1 (grid probes have no name).
   int32_t find_probe(const char* name, uint32_t length) const;
+
+  // Moving lights and panes (0 / null without them). moving_light(k) and pane(k) are sorted by
+  // their light index; moving_index(light) / pane_index(light) give k for a light index (binary
+  // search), or -1 when the light is not moving / not a pane.
+  uint32_t moving_light_count() const { return moving_light_count_; }
+  const pack::MovingLightRecord& moving_light(uint32_t k) const { return moving_lights_[k]; }
+  uint32_t pane_count() const { return pane_count_; }
+  const pack::PaneRecord& pane(uint32_t k) const { return panes_[k]; }
+  int32_t moving_index(uint32_t light) const;
+  int32_t pane_index(uint32_t light) const;
+  bool light_moves(uint32_t light) const {
+    return (lights_[light].flags & pack::kLightFlagMoving) != 0;
+  }
+  bool light_is_pane(uint32_t light) const { return lights_[light].type == pack::kLightPane; }
+  // Bytes of the panes section (what the panes' depth maps and entry points take).
+  uint64_t pane_bytes() const { return uint64_t(pane_count_) * sizeof(pack::PaneRecord); }
 
   // Group lookups; -1 when the pack holds no such group (nothing to draw).
   int32_t base_group() const;
@@ -185,6 +207,10 @@ class PackView {
   uint32_t probe_set_count_ = 0;
   uint32_t probe_entry_count_ = 0;
   uint64_t probe_bytes_ = 0;
+  const pack::MovingLightRecord* moving_lights_ = nullptr;
+  const pack::PaneRecord* panes_ = nullptr;
+  uint32_t moving_light_count_ = 0;
+  uint32_t pane_count_ = 0;
 };
 
 // CRC-32 (IEEE, reflected), the pack's table checksum. `crc` chains calls; start with 0.

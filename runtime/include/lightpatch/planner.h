@@ -112,6 +112,12 @@ struct FrameStats {
   // Error bound of the incremental history since the last rebuild, as a fraction of each texel's
   // magnitude M (see Drift above).
   float error_bound = 0.0f;
+  // Moving lights (set by Runtime::update; runtime.h, "Moving lights"): pane factors pushed to the
+  // planner this frame, panes still off their target beyond the tolerance in force after it, and
+  // pushes the planner refused this frame (kOutOfRange: the pane keeps its old factor).
+  uint32_t pane_changes = 0;
+  uint32_t pane_pending = 0;
+  uint32_t pane_refused = 0;
 };
 
 class Planner {
@@ -176,6 +182,9 @@ class Planner {
 
   // An upper bound of |L| over the map for the wanted state: max |B| + sum_l max_c f_l * max A_l.
   float wanted_map_bound() const;
+  // A_l's bound: max over texels of the sum of |values| of all of light l's groups (irradiance
+  // per unit factor). What a change of l's factor by d can move any texel: at most |d| * this.
+  float light_bound(uint32_t light) const { return light_bound_[light]; }
 
  private:
   struct Factor {

@@ -56,6 +56,22 @@
 // light map shows), samples the SH where its moving things are and uploads it as uniforms; the
 // runtime draws no probe.
 //
+// Moving lights (pack_format.h, "Moving lights"; moving_lights.h): set_light_pose() moves a light
+// flagged moving; its colour, intensity, on and pose set the factors of the pack's panes (pseudo-
+// lights whose contribution groups hold the bounce light of a patch of surface). update() follows
+// them with set_light changes of the panes, within limits: when a moving light changed since the
+// last update() it computes every pane's target factor (O(panes * moving lights * entry points),
+// no allocation) and pushes, largest first, at most RuntimeLimits::max_pane_changes panes whose
+// error |target - wanted factor| (max over channels) times the planner's bound of the pane's
+// light (Planner::light_bound) exceeds pane_tolerance times the sum over panes of max_c(target) *
+// bound. In an update() with no moving-light change since the last one the tolerance is 0: every
+// pane off its target is pushed, so a light that stops gets every pane's factor exactly (bit for
+// bit what SceneState::light_factor gives for state()) within ceil(P / max_pane_changes)
+// update()s after the one that saw its last change (P: the panes off target then, at most
+// pane_count()); the planner then shows those changes with its own latency (FrameStats). A push the
+// planner refuses (kOutOfRange) leaves the pane at its old factor (FrameStats::pane_refused) and
+// is tried again the next frame.
+//
 // GL errors are checked (glGetError, which can stall a driver) only in builds with
 // LIGHTPATCH_GL_CHECKS (CMake option; on in Debug builds); elsewhere update() does not look.
 #pragma once
@@ -75,6 +91,12 @@ struct RuntimeLimits {
   bool force_cpu_fallback = false;
   // Accumulate in RGBA16F even where float blending exists (tests, comparisons).
   bool force_half_accumulator = false;
+  // Moving lights (see above): at most this many pane factors pushed to the planner per update()
+  // (0: the panes keep their factors), largest error first.
+  uint32_t max_pane_changes = 16;
+  // While moving lights change, a pane is pushed only when its error exceeds this fraction of the
+  // sum over panes of target * bound (the light the panes bring at most): 1/256, an 8-bit step.
+  float pane_tolerance = 1.0f / 256.0f;
 };
 
 enum class RecomposePath : uint8_t { kGpuFloat, kGpuHalf, kCpu };
@@ -126,6 +148,15 @@ class Runtime {
   Status set_light_color(uint32_t light, const float rgb[3]);
   Status set_light_intensity(uint32_t light, float intensity);
   Status set_object_visible(uint32_t object, bool visible);
+  // A light flagged moving (PackView::light_moves): its pose, world space, metres (position at
+  // most 1e6 from the origin; direction unit within 1e-3, normalised; spots only). The panes follow
+  // over the next update()s (see "Moving lights"). kInvalidArgument for another light or a pose
+  // outside those ranges (state unchanged). The setters above refuse a pane light
+  // (kInvalidArgument: a pane's factor follows the moving lights).
+  Status set_light_pose(uint32_t light, const LightPose& pose);
+  // The wanted pose (all zero for a light that does not move).
+  LightPose light_pose(uint32_t light) const;
+  // The light's wanted state as the planner holds it (a pane: on, its pushed factor, intensity 1).
   LightState light(uint32_t light) const;
   bool object_visible(uint32_t object) const { return planner_.object_visible(object); }
   // The wanted state as a SceneState (what the setters above accepted), e.g. for
@@ -156,12 +187,14 @@ class Runtime {
   // two, fixed from open() to close().
   float light_map_scale() const { return scale_; }
   bool ready() const { return planner_.map_ready(); }
-  bool idle() const { return planner_.idle(); }
+  // Presented, nothing pending, and every pane at its target factor (see "Moving lights").
+  bool idle() const { return planner_.idle() && !panes_dirty_ && !panes_off_; }
   RecomposePath path() const { return path_; }
   bool gpu_path() const { return path_ != RecomposePath::kCpu; }
   // How the accumulator rounds (probed at open() on the GPU paths).
   const TargetPrecision& precision() const { return precision_; }
-  const FrameStats& stats() const { return planner_.stats(); }
+  // The planner's stats of the last update(), with its pane pushes (FrameStats::pane_*).
+  const FrameStats& stats() const { return stats_; }
   const Planner& planner() const { return planner_; }
   RuntimeMemory memory() const { return memory_; }
   uint32_t width() const { return pack_.lightmap_width(); }
@@ -193,6 +226,9 @@ class Runtime {
   void set_draw_state() const;
   void reset_draw_state() const;
   Status read_map(uint8_t target, float* out, Error* error) const;
+  // Pushes pane factors to the planner (see "Moving lights"); fills the stats' pane fields.
+  void update_panes(FrameStats* stats);
+  Status update_planner(uint64_t budget_texels);
 
   PackView pack_;
   RuntimeLimits limits_;
@@ -204,6 +240,16 @@ class Runtime {
   float scale_ = 1.0f;          // light_map_scale()
   float inverse_scale_ = 1.0f;  // 1 / scale_ (exact: a power of two)
   RuntimeMemory memory_;
+  FrameStats stats_;
+
+  // Moving lights: per pane its target factor (RGB) and error; the chosen pushes (a heap of at
+  // most pane_pick_capacity_ panes). Allocated at open().
+  float* pane_target_ = nullptr;
+  float* pane_error_ = nullptr;
+  uint32_t* pane_pick_ = nullptr;
+  uint32_t pane_pick_capacity_ = 0;
+  bool panes_dirty_ = true;  // a moving light changed since the targets were computed
+  bool panes_off_ = true;    // some pane's wanted factor differs from its target
 
   // GL objects.
   uint32_t* atlas_textures_ = nullptr;  // [atlas_count]

@@ -44,6 +44,14 @@ Status CpuRecomposer::push(const SceneState& state) {
     return Status::kInvalidArgument;
   }
   for (uint32_t l = 0; l < state.light_count(); ++l) {
+    if (state.light_is_pane(l)) {
+      // A pane's factor follows the state's moving lights (f_pane, moving_lights.h), exact: the
+      // planner multiplies it by intensity 1.
+      float f[3];
+      state.light_factor(l, f);
+      if (Status st = planner_.set_light(l, true, f, 1.0f); st != Status::kOk) return st;
+      continue;
+    }
     const LightState& s = state.light(l);
     if (Status st = planner_.set_light(l, s.on, s.color, s.intensity); st != Status::kOk) return st;
   }

@@ -54,6 +54,10 @@ const char* section_name(uint32_t type) {
       return "probe sets";
     case kSectionProbeEntries:
       return "probe entries";
+    case kSectionMovingLights:
+      return "moving lights";
+    case kSectionPanes:
+      return "panes";
   }
   return "unknown";
 }
@@ -119,6 +123,11 @@ bool owner_ok(uint16_t kind, uint16_t light, uint16_t object_a, uint16_t object_
   return false;
 }
 
+// Whether a group or probe set of this kind names a light (contribution, shadow, pair).
+bool group_has_light_owner(uint16_t kind) {
+  return kind == kGroupContribution || kind == kGroupShadow || kind == kGroupPairCorrection;
+}
+
 bool all_finite(const float* v, uint32_t n) {
   for (uint32_t i = 0; i < n; ++i) {
     if (!std::isfinite(v[i])) return false;
@@ -146,6 +155,10 @@ struct Parsed {
   uint32_t probe_set_count = 0;
   uint32_t probe_entry_count = 0;
   uint64_t probe_bytes = 0;
+  const MovingLightRecord* moving_lights = nullptr;
+  const PaneRecord* panes = nullptr;
+  uint32_t moving_light_count = 0;
+  uint32_t pane_count = 0;
 };
 
 class Validator {
@@ -162,6 +175,9 @@ class Validator {
   Status check_limits(const Header& h);
   Status check_probe_sections(Parsed* out);
   Status check_probes(const Header& h, Parsed* out);
+  Status check_moving_sections(Parsed* out);
+  Status check_moving(const Header& h, const LightRecord* lights, const GroupRecord* groups,
+                      Parsed* out);
   template <typename T>
   const T* at(uint64_t offset) const {
     return reinterpret_cast<const T*>(b_ + offset);
@@ -383,6 +399,179 @@ Status Validator::check_probes(const Header& h, Parsed* out) {
   return Status::kOk;
 }
 
+// Whether v is a finite unit vector within 1e-3 (double: no overflow for any finite float).
+bool unit_vector(const float v[3]) {
+  if (!all_finite(v, 3)) return false;
+  const double len = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+  return std::fabs(len - 1.0) <= 1e-3;
+}
+
+// The moving-light sections' presence and sizes (before the checksum): both or neither, whole
+// records, counts within the format's limits.
+Status Validator::check_moving_sections(Parsed* out) {
+  const Section& moving = sections_[kSectionMovingLights];
+  const Section& panes = sections_[kSectionPanes];
+  if (!moving.present) {
+    if (panes.present)
+      return fail(Status::kCorrupt, "panes section without a moving lights section");
+    return Status::kOk;
+  }
+  if (!panes.present)
+    return fail(Status::kCorrupt, "moving lights section without a panes section");
+  if (moving.length % sizeof(MovingLightRecord) != 0 || panes.length % sizeof(PaneRecord) != 0) {
+    return fail(Status::kCorrupt,
+                "moving lights or panes section: %llu and %llu bytes, not whole records of %llu "
+                "and %llu bytes",
+                static_cast<unsigned long long>(moving.length),
+                static_cast<unsigned long long>(panes.length),
+                static_cast<unsigned long long>(sizeof(MovingLightRecord)),
+                static_cast<unsigned long long>(sizeof(PaneRecord)));
+  }
+  const uint64_t moving_count = moving.length / sizeof(MovingLightRecord);
+  const uint64_t pane_count = panes.length / sizeof(PaneRecord);
+  if (moving_count == 0) return fail(Status::kCorrupt, "moving lights section: no records");
+  // Each record names a distinct light (checked below), and lights are fewer than kNone16.
+  if (moving_count >= kNone16) {
+    return fail(Status::kCorrupt, "moving lights section: %llu records, more than lights can be",
+                static_cast<unsigned long long>(moving_count));
+  }
+  if (pane_count > kMaxPanes) {
+    return fail(Status::kCorrupt, "panes section: %llu panes, over the limit of %u",
+                static_cast<unsigned long long>(pane_count), kMaxPanes);
+  }
+  out->moving_light_count = uint32_t(moving_count);
+  out->pane_count = uint32_t(pane_count);
+  return Status::kOk;
+}
+
+// The moving lights, their panes and the owners that may not have groups or probe sets (after
+// the lights, groups and probes are checked).
+Status Validator::check_moving(const Header& h, const LightRecord* lights,
+                               const GroupRecord* groups, Parsed* out) {
+  uint32_t flagged = 0, pane_lights = 0;
+  for (uint32_t i = 0; i < h.light_count; ++i) {
+    if (lights[i].flags & kLightFlagMoving) ++flagged;
+    if (lights[i].type == kLightPane) ++pane_lights;
+  }
+  auto moving_light = [&](uint32_t l) {
+    return l < h.light_count && (lights[l].flags & kLightFlagMoving) != 0;
+  };
+  auto pane_light = [&](uint32_t l) { return l < h.light_count && lights[l].type == kLightPane; };
+  if (!sections_[kSectionMovingLights].present) {
+    if (flagged > 0)
+      return fail(Status::kCorrupt, "%u lights flagged moving but no moving lights section",
+                  flagged);
+    if (pane_lights > 0)
+      return fail(Status::kCorrupt, "%u pane lights but no moving lights section", pane_lights);
+  }
+  // Moving lights draw nothing of their own; a pane only its bounce light (a contribution).
+  for (uint32_t i = 0; i < h.group_count; ++i) {
+    const GroupRecord& g = groups[i];
+    if (!group_has_light_owner(g.kind)) continue;
+    if (moving_light(g.light)) {
+      return fail(Status::kCorrupt,
+                  "group %u (%s): light %u moves and has no groups (its bounce light is its "
+                  "panes')",
+                  i, group_kind_name(g.kind), g.light);
+    }
+    if (pane_light(g.light) && g.kind != kGroupContribution) {
+      return fail(Status::kCorrupt, "group %u (%s): pane light %u has only a contribution group", i,
+                  group_kind_name(g.kind), g.light);
+    }
+  }
+  if (out->probe_set_count > 0) {
+    for (uint32_t i = 0; i < out->probe_set_count; ++i) {
+      const ProbeSetRecord& s = out->probe_sets[i];
+      if (moving_light(s.light) || pane_light(s.light)) {
+        return fail(Status::kCorrupt, "probe set %u (%s): light %u is a %s and has no probe sets",
+                    i, group_kind_name(s.kind), s.light,
+                    pane_light(s.light) ? "pane" : "moving light");
+      }
+    }
+  }
+  if (!sections_[kSectionMovingLights].present) return Status::kOk;
+  const uint32_t nm = out->moving_light_count, np = out->pane_count;
+  if (nm != flagged) {
+    return fail(Status::kCorrupt, "%u moving light records for %u lights flagged moving", nm,
+                flagged);
+  }
+  if (np != pane_lights) {
+    return fail(Status::kCorrupt, "%u pane records for %u pane lights", np, pane_lights);
+  }
+  const MovingLightRecord* moving = at<MovingLightRecord>(sections_[kSectionMovingLights].offset);
+  for (uint32_t k = 0; k < nm; ++k) {
+    const MovingLightRecord& m = moving[k];
+    // Strictly increasing and as many as the flagged lights: each flagged light exactly once.
+    if (!moving_light(m.light)) {
+      return fail(Status::kCorrupt, "moving light %u: light %u is not a light flagged moving", k,
+                  m.light);
+    }
+    if (k > 0 && moving[k - 1].light >= m.light) {
+      return fail(Status::kCorrupt,
+                  "moving light %u: light %u not after light %u (sorted by light, each once)", k,
+                  m.light, moving[k - 1].light);
+    }
+    if (!all_finite(m.position, 3))
+      return fail(Status::kCorrupt, "moving light %u: position is not finite", k);
+    if (!unit_vector(m.direction))
+      return fail(Status::kCorrupt, "moving light %u: direction is not a unit vector", k);
+    if (!finite_non_negative(m.range))
+      return fail(Status::kCorrupt, "moving light %u: range is not finite and >= 0", k);
+    if (!finite_non_negative(m.radius))
+      return fail(Status::kCorrupt, "moving light %u: radius is not finite and >= 0", k);
+    if (!std::isfinite(m.inner_cone) || !std::isfinite(m.outer_cone))
+      return fail(Status::kCorrupt, "moving light %u: cone angles are not finite", k);
+    // The cone of a spot (1.5707964: pi/2 rounded up to a float, as the importer accepts).
+    if (lights[m.light].type == kLightSpot &&
+        !(m.inner_cone >= 0.0f && m.inner_cone <= m.outer_cone && m.outer_cone > 0.0f &&
+          m.outer_cone <= 1.5707964f)) {
+      return fail(Status::kCorrupt,
+                  "moving light %u: spot cone %g..%g needs 0 <= inner <= outer <= pi/2, outer > 0",
+                  k, double(m.inner_cone), double(m.outer_cone));
+    }
+    if (m.reserved != 0)
+      return fail(Status::kCorrupt, "moving light %u: reserved field not zero", k);
+  }
+  const PaneRecord* panes = at<PaneRecord>(sections_[kSectionPanes].offset);
+  for (uint32_t k = 0; k < np; ++k) {
+    const PaneRecord& p = panes[k];
+    if (!pane_light(p.light))
+      return fail(Status::kCorrupt, "pane %u: light %u is not a pane light", k, p.light);
+    if (k > 0 && panes[k - 1].light >= p.light) {
+      return fail(Status::kCorrupt,
+                  "pane %u: light %u not after light %u (sorted by light, each once)", k, p.light,
+                  panes[k - 1].light);
+    }
+    if (!all_finite(p.eye, 3)) return fail(Status::kCorrupt, "pane %u: eye is not finite", k);
+    if (!unit_vector(p.normal))
+      return fail(Status::kCorrupt, "pane %u: normal is not a unit vector", k);
+    if (!std::isfinite(p.radius) || !(p.radius > 0.0f))
+      return fail(Status::kCorrupt, "pane %u: radius is not finite and > 0", k);
+    if (!std::isfinite(p.depth_range) || !(p.depth_range > 0.0f))
+      return fail(Status::kCorrupt, "pane %u: depth range is not finite and > 0", k);
+    if (p.point_count == 0 || p.point_count > kMaxPanePoints) {
+      return fail(Status::kCorrupt, "pane %u: %u entry points (must be 1..%u)", k, p.point_count,
+                  kMaxPanePoints);
+    }
+    for (uint32_t i = 0; i < kMaxPanePoints; ++i) {
+      const PanePoint& pt = p.points[i];
+      if (i >= p.point_count) {
+        static const PanePoint kZero{};
+        if (std::memcmp(&pt, &kZero, sizeof pt) != 0)
+          return fail(Status::kCorrupt, "pane %u: unused entry point %u not zero", k, i);
+        continue;
+      }
+      if (!all_finite(pt.position, 3))
+        return fail(Status::kCorrupt, "pane %u: entry point %u position is not finite", k, i);
+      if (!unit_vector(pt.normal))
+        return fail(Status::kCorrupt, "pane %u: entry point %u normal is not a unit vector", k, i);
+    }
+  }
+  out->moving_lights = moving;
+  out->panes = panes;
+  return Status::kOk;
+}
+
 Status Validator::run(Parsed* out) {
   if (b_ == nullptr && size_ > 0) return fail(Status::kInvalidArgument, "null pack data");
   if (reinterpret_cast<uintptr_t>(b_) % 8 != 0) {
@@ -513,6 +702,7 @@ Status Validator::run(Parsed* out) {
   }
 
   if (Status s = check_probe_sections(out); s != Status::kOk) return s;
+  if (Status s = check_moving_sections(out); s != Status::kOk) return s;
 
   // Checksum before the records are interpreted (a flipped byte is reported as such).
   uint32_t crc = crc32(entries, uint64_t(h.section_count) * sizeof(SectionEntry));
@@ -537,7 +727,11 @@ Status Validator::run(Parsed* out) {
 
   for (uint32_t i = 0; i < h.light_count; ++i) {
     const LightRecord& l = lights[i];
-    if (Status s = check_name("light", i, l.name_offset, l.name_length, false); s != Status::kOk)
+    // A pane is a pseudo-light without a name (pack_format.h, "Moving lights").
+    const bool pane = l.type == kLightPane;
+    if (pane && (l.name_length != 0 || l.name_offset != 0))
+      return fail(Status::kCorrupt, "light %u: a pane light with a name", i);
+    if (Status s = check_name("light", i, l.name_offset, l.name_length, pane); s != Status::kOk)
       return s;
     for (int c = 0; c < 3; ++c) {
       if (!finite_non_negative(l.color[c])) {
@@ -547,9 +741,15 @@ Status Validator::run(Parsed* out) {
     if (!finite_non_negative(l.intensity)) {
       return fail(Status::kCorrupt, "light %u: intensity is not finite and >= 0", i);
     }
-    if (l.type > kLightDirectional)
-      return fail(Status::kCorrupt, "light %u: unknown type %u", i, l.type);
-    if (l.reserved != 0) return fail(Status::kCorrupt, "light %u: reserved field not zero", i);
+    if (l.type > kLightPane) return fail(Status::kCorrupt, "light %u: unknown type %u", i, l.type);
+    if ((l.flags & ~uint32_t(kLightFlagMoving)) != 0)
+      return fail(Status::kCorrupt, "light %u: unknown flags %08x", i, l.flags);
+    if (pane && l.flags != 0) return fail(Status::kCorrupt, "light %u: a pane light with flags", i);
+    if ((l.flags & kLightFlagMoving) && l.type != kLightPoint && l.type != kLightSpot)
+      return fail(Status::kCorrupt, "light %u: flagged moving but not a point or spot light", i);
+    if (pane && l.intensity != 1.0f)
+      return fail(Status::kCorrupt, "light %u: a pane light with intensity %g, not 1", i,
+                  double(l.intensity));
   }
   for (uint32_t i = 0; i < h.object_count; ++i) {
     const ObjectRecord& o = objects[i];
@@ -726,6 +926,7 @@ Status Validator::run(Parsed* out) {
   }
 
   if (Status s = check_probes(h, out); s != Status::kOk) return s;
+  if (Status s = check_moving(h, lights, groups, out); s != Status::kOk) return s;
   if (Status s = check_limits(h); s != Status::kOk) return s;
 
   out->header = &h;
@@ -772,6 +973,10 @@ Status PackView::open(const void* data, uint64_t size, const RecomposeLimits& li
   out->probe_set_count_ = p.probe_set_count;
   out->probe_entry_count_ = p.probe_entry_count;
   out->probe_bytes_ = p.probe_bytes;
+  out->moving_lights_ = p.moving_lights;
+  out->panes_ = p.panes;
+  out->moving_light_count_ = p.moving_light_count;
+  out->pane_count_ = p.pane_count;
   if (error != nullptr) *error = Error();
   return Status::kOk;
 }
@@ -800,11 +1005,36 @@ const uint32_t* PackView::mesh_indices(uint32_t i) const {
 }
 
 int32_t PackView::find_light(const char* name, uint32_t length) const {
+  if (length == 0) return -1;  // panes have no name
   for (uint32_t i = 0; i < light_count(); ++i) {
     if (light_name(i).equals(name, length)) return static_cast<int32_t>(i);
   }
   return -1;
 }
+namespace {
+// Records sorted by strictly increasing `light`: binary search.
+template <typename Record>
+int32_t find_by_light(const Record* records, uint32_t count, uint32_t light) {
+  uint32_t lo = 0, hi = count;
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (records[mid].light == light) return static_cast<int32_t>(mid);
+    if (records[mid].light < light)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return -1;
+}
+}  // namespace
+
+int32_t PackView::moving_index(uint32_t light) const {
+  return find_by_light(moving_lights_, moving_light_count_, light);
+}
+int32_t PackView::pane_index(uint32_t light) const {
+  return find_by_light(panes_, pane_count_, light);
+}
+
 int32_t PackView::find_object(const char* name, uint32_t length) const {
   for (uint32_t i = 0; i < object_count(); ++i) {
     if (object_name(i).equals(name, length)) return static_cast<int32_t>(i);

@@ -1,5 +1,6 @@
 #include "lightpatch/runtime.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include "lightpatch/cpu_sink.h"
 #include "lightpatch/group_rules.h"
 #include "lightpatch/half_float.h"
+#include "lightpatch/moving_lights.h"
 #include "lightpatch/platform/gl.h"
 #include "lightpatch_shaders.h"
 
@@ -255,7 +257,15 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
 
   run_end_ = static_cast<uint32_t*>(std::malloc(sizeof(uint32_t) * (pack.patch_count() + 1)));
   atlas_textures_ = static_cast<uint32_t*>(std::calloc(pack.atlas_count() + 1, sizeof(uint32_t)));
-  if (!run_end_ || !atlas_textures_) {
+  const uint32_t panes = pack.pane_count();
+  pane_pick_capacity_ = std::min(limits.max_pane_changes, panes);
+  pane_target_ = static_cast<float*>(std::calloc(size_t(panes) * 3 + 1, sizeof(float)));
+  pane_error_ = static_cast<float*>(std::calloc(size_t(panes) + 1, sizeof(float)));
+  pane_pick_ =
+      static_cast<uint32_t*>(std::calloc(size_t(pane_pick_capacity_) + 1, sizeof(uint32_t)));
+  panes_dirty_ = panes_off_ = panes > 0;
+  stats_ = FrameStats();
+  if (!run_end_ || !atlas_textures_ || !pane_target_ || !pane_error_ || !pane_pick_) {
     close();
     return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
   }
@@ -564,6 +574,12 @@ void Runtime::close() {
   std::free(run_end_);
   std::free(cpu_accumulator_);
   std::free(cpu_map_);
+  std::free(pane_target_);
+  std::free(pane_error_);
+  std::free(pane_pick_);
+  pane_target_ = pane_error_ = nullptr;
+  pane_pick_ = nullptr;
+  pane_pick_capacity_ = 0;
   atlas_textures_ = nullptr;
   run_end_ = nullptr;
   cpu_accumulator_ = nullptr;
@@ -594,9 +610,93 @@ LightState Runtime::light(uint32_t i) const {
 }
 
 Status Runtime::set_light(uint32_t i, const LightState& state) {
+  assert(i < light_count() && "set_light: light index out of range");
+  if (i >= light_count()) return Status::kInvalidArgument;
+  if (pack_.light_is_pane(i)) return Status::kInvalidArgument;  // follows the moving lights
   const Status s = planner_.set_light(i, state.on, state.color, state.intensity);
-  if (s == Status::kOk) wanted_.set_light(i, state);
+  if (s == Status::kOk) {
+    wanted_.set_light(i, state);
+    if (pack_.light_moves(i)) panes_dirty_ = true;
+  }
   return s;
+}
+
+Status Runtime::set_light_pose(uint32_t i, const LightPose& pose) {
+  assert(i < light_count() && "set_light_pose: light index out of range");
+  if (i >= light_count()) return Status::kInvalidArgument;
+  const LightPose before = wanted_.light_pose(i);
+  const Status s = wanted_.set_light_pose(i, pose);
+  // The same pose again is no change: the panes settle (tolerance 0) while the light stands.
+  if (s == Status::kOk && std::memcmp(&before, &wanted_.light_pose(i), sizeof before) != 0)
+    panes_dirty_ = true;
+  return s;
+}
+
+LightPose Runtime::light_pose(uint32_t i) const {
+  return wanted_.light_pose(i);
+}
+
+void Runtime::update_panes(FrameStats* stats) {
+  const uint32_t np = pack_.pane_count();
+  if (np == 0) panes_dirty_ = panes_off_ = false;  // moving lights without panes: nothing to do
+  if (!panes_dirty_ && !panes_off_) return;
+  const bool moved = panes_dirty_;
+  if (moved) {
+    for (uint32_t k = 0; k < np; ++k) pane_factor(pack_, k, wanted_, pane_target_ + 3 * k);
+    panes_dirty_ = false;
+  }
+  // Errors, and the light the panes bring at most (the tolerance's scale).
+  float total = 0.0f;
+  for (uint32_t k = 0; k < np; ++k) {
+    const uint32_t light = pack_.pane(k).light;
+    const float bound = planner_.light_bound(light);
+    float wanted[3];
+    planner_.light_color(light, wanted);  // a pane is on with intensity 1: its factor
+    const float* target = pane_target_ + 3 * k;
+    float off = 0.0f, peak = 0.0f;
+    for (int c = 0; c < 3; ++c) {
+      off = std::fmax(off, std::fabs(target[c] - wanted[c]));
+      peak = std::fmax(peak, target[c]);
+    }
+    pane_error_[k] = off * bound;
+    total += peak * bound;
+  }
+  const float threshold = moved ? limits_.pane_tolerance * total : 0.0f;
+  // The largest errors above the threshold: a heap whose top is the least of those chosen.
+  const float* error = pane_error_;
+  auto better = [error](uint32_t a, uint32_t b) {
+    return error[a] > error[b] || (error[a] == error[b] && a < b);
+  };
+  uint32_t chosen = 0, over = 0, off_target = 0;
+  for (uint32_t k = 0; k < np; ++k) {
+    if (pane_error_[k] > 0.0f) ++off_target;
+    if (!(pane_error_[k] > threshold)) continue;
+    ++over;
+    if (pane_pick_capacity_ == 0) continue;
+    if (chosen < pane_pick_capacity_) {
+      pane_pick_[chosen++] = k;
+      std::push_heap(pane_pick_, pane_pick_ + chosen, better);
+    } else if (better(k, pane_pick_[0])) {
+      std::pop_heap(pane_pick_, pane_pick_ + chosen, better);
+      pane_pick_[chosen - 1] = k;
+      std::push_heap(pane_pick_, pane_pick_ + chosen, better);
+    }
+  }
+  uint32_t pushed = 0, refused = 0;
+  for (uint32_t i = 0; i < chosen; ++i) {
+    const uint32_t k = pane_pick_[i];
+    const Status s = planner_.set_light(pack_.pane(k).light, true, pane_target_ + 3 * k, 1.0f);
+    if (s == Status::kOk)
+      ++pushed;
+    else
+      ++refused;  // kOutOfRange: the pane keeps its old factor, tried again next frame
+  }
+  panes_off_ = off_target > pushed;
+  stats->pane_changes = pushed;
+  stats->pane_refused = refused;
+  // Off target beyond the tolerance in force after this frame: while the lights move, those
+  // over the threshold not pushed; once they stand, every pane not yet exact.
+  stats->pane_pending = moved ? over - pushed : off_target - pushed;
 }
 Status Runtime::set_light_on(uint32_t i, bool on) {
   assert(i < light_count() && "set_light_on: light index out of range");
@@ -652,6 +752,17 @@ void Runtime::reset_draw_state() const {
 Status Runtime::update(uint64_t budget_texels) {
   assert(open_ && "update: the runtime is not open");
   if (!open_) return Status::kInvalidArgument;
+  FrameStats panes;
+  update_panes(&panes);
+  const Status s = update_planner(budget_texels);
+  stats_ = planner_.stats();
+  stats_.pane_changes = panes.pane_changes;
+  stats_.pane_pending = panes.pane_pending;
+  stats_.pane_refused = panes.pane_refused;
+  return s;
+}
+
+Status Runtime::update_planner(uint64_t budget_texels) {
   if (path_ == RecomposePath::kCpu) {
     CpuSink sink;
     sink.bind(&pack_, cpu_accumulator_, nullptr, cpu_map_, inverse_scale_);

@@ -113,6 +113,7 @@ ItemIrradiance measure_item(const PlaySession& s, const glm::mat4& view, SceneSt
   *item = s.world.objects[static_cast<size_t>(held.object)].name;
   if (steady->assign(s.runtime.state()) != Status::kOk) return r;
   for (uint32_t l = 0; l < steady->light_count(); ++l) {
+    if (steady->light_is_pane(l)) continue;  // follows the moving lights
     if (steady->set_light(l, s.game->base_light(l)) != Status::kOk) return r;
   }
   float sh[kProbeShFloats];

@@ -42,6 +42,8 @@ World build_world(const GltfScene& scene, const PackView& pack) {
   w.lights.resize(pack.light_count());
   for (uint32_t l = 0; l < pack.light_count(); ++l) {
     WorldLight& wl = w.lights[l];
+    // A moving lights' pane (pack_format.h) is no light of the scene: unnamed, kind kOther.
+    if (pack.light_is_pane(l)) continue;
     wl.name = to_string(pack.light_name(l));
     wl.kind = kind_of(wl.name);
     bool found = false;

@@ -327,9 +327,10 @@ Json build_document(const std::vector<Material>& materials, const auto& meshes,
     if (n.mesh >= 0) j["mesh"] = n.mesh;
     if (!n.children.empty()) j["children"] = n.children;
     if (n.light >= 0) j["extensions"]["KHR_lights_punctual"]["light"] = n.light;
-    if (n.semi_dynamic || n.light_radius > 0.0f || !n.cast_shadows) {
+    if (n.semi_dynamic || n.light_radius > 0.0f || !n.cast_shadows || n.moving) {
       Json extras = Json::object();
       if (n.semi_dynamic) extras["semiDynamic"] = true;
+      if (n.moving) extras["moving"] = true;
       if (n.light_radius > 0.0f) extras["lightRadius"] = static_cast<double>(n.light_radius);
       if (!n.cast_shadows) extras["castShadows"] = false;
       j["extras"] = extras;

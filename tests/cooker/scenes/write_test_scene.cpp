@@ -1,6 +1,6 @@
 // write_test_scene: writes the test scenes the accuracy measurements use (docs/accuracy.md), so
 // that every table there can be measured again from a build.
-// Usage: write_test_scene room_soft|thin_panel|low_slab OUT.glb|OUT.gltf
+// Usage: write_test_scene room_soft|thin_panel|low_slab|two_rooms OUT.glb|OUT.gltf
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -9,8 +9,9 @@
 
 int main(int argc, char** argv) {
   if (argc != 3) {
-    std::fprintf(stderr,
-                 "usage: write_test_scene room_soft|thin_panel|low_slab OUT.glb|OUT.gltf\n");
+    std::fprintf(
+        stderr,
+        "usage: write_test_scene room_soft|thin_panel|low_slab|two_rooms OUT.glb|OUT.gltf\n");
     return 2;
   }
   const std::string name = argv[1];
@@ -21,10 +22,13 @@ int main(int argc, char** argv) {
       lightpatch::test::thin_panel_room().write(argv[2]);
     } else if (name == "low_slab") {
       lightpatch::test::low_slab_room().write(argv[2]);
+    } else if (name == "two_rooms") {
+      lightpatch::test::two_rooms_lantern().write(argv[2]);
     } else {
-      std::fprintf(stderr,
-                   "write_test_scene: unknown scene '%s' (room_soft, thin_panel, low_slab)\n",
-                   name.c_str());
+      std::fprintf(
+          stderr,
+          "write_test_scene: unknown scene '%s' (room_soft, thin_panel, low_slab, two_rooms)\n",
+          name.c_str());
       return 2;
     }
   } catch (const std::exception& e) {

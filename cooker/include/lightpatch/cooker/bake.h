@@ -33,6 +33,13 @@ enum class Integrator { kGather, kReference };
 const char* integrator_name(Integrator i);
 Integrator parse_integrator(const std::string& name);  // throws CookError
 
+// Panes of the moving lights by default (BakeOptions::panes; docs/moving_lights.md has the table
+// this was chosen by).
+constexpr int kDefaultPanes = 32;
+// The most BakeOptions::panes may ask for (the refinement may make 4x as many; pack_format.h
+// kMaxPanes).
+constexpr int kMaxPaneOption = 1024;
+
 struct BakeOptions {
   Quality quality = Quality::kPreview;
   // Samples per texel for lights with a radius and emissive surfaces; 0 = the preset (draft 4,
@@ -63,6 +70,12 @@ struct BakeOptions {
   // authored state's 99th percentile / 255, rounded down to a quarter octave). A level's step
   // pinned keeps every job's hash through edits that move its percentile (cook_jobs.h).
   float output_step = 0.0f;
+  // Moving lights (docs/moving_lights.md): panes their bounce light is made of, before the
+  // line-of-sight refinement (which may make up to 4x as many); 0 = kDefaultPanes.
+  int panes = 0;
+  // bake_state: also the moving lights' direct light (for pictures; the runtime's maps hold only
+  // their bounce light, the game draws their direct light).
+  bool moving_direct = false;
   // Light probes for moving things (probes.h): placed and lit after the maps are finalized, from
   // them; they change no map. Its seed and threads are set from the ones above.
   ProbeOptions probes;
@@ -116,8 +129,13 @@ class BakeSession {
   GroupBake bake_group(size_t group, Progress& progress, Report& report) const;
   // The groups' maps as one BakedMaps, in plan order (every group exactly once).
   BakedMaps assemble(std::vector<GroupBake> groups, Report& report) const;
+  // The moving lights and their panes into `maps` (BakedMaps::moving_lights, ::panes): clusters
+  // the static texels and solves each pane's bounce light for irradiance 1 on it. No panes
+  // without bounce light or without a moving light.
+  void bake_panes(BakedMaps& maps, Progress& progress, Report& report) const;
   // One state baked directly (3 channels): every light at its state, the visible objects
-  // present, their bounce light included.
+  // present, their bounce light included; a moving light at the state's pose, its bounce light
+  // only (its direct light too with BakeOptions::moving_direct).
   FloatImage bake_state(const StateSpec& state, Progress& progress, Report& report) const;
 
   struct Impl;  // the session's state (src/bake/session.h)

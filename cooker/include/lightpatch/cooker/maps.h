@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "lightpatch/pack_format.h"
+
 namespace lightpatch::cooker {
 
 // Row-major float image, row 0 = top (glTF v = 0). channels is 1 or 3.
@@ -45,6 +47,16 @@ struct PairCorrectionMap {
   FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
 };
 
+// One pane of the moving lights (pack_format.h, "Moving lights"; docs/moving_lights.md): the
+// bounce light everywhere when its texels receive irradiance 1 (grey), and where the runtime's
+// weights read it from. record.light is set by the pack builder.
+struct PaneMap {
+  pack::PaneRecord record{};
+  std::vector<uint32_t> texels;  // its light-map texels (row-major indices)
+  FloatImage map;                // the bounce light, 3 channels
+  FloatImage indirect;           // its block image (BakedMaps), or empty
+};
+
 struct BakedMaps {
   // Irradiance of one 8-bit step of the final light map at the authored exposure (the
   // significance threshold for early outs, pair culling and patch extraction). For a light's
@@ -69,6 +81,10 @@ struct BakedMaps {
   std::vector<ShadowMap> shadows;                   // kept pairs only
   std::vector<PairCorrectionMap> pair_corrections;  // overlapping shadows that matter
   std::vector<StaticShadowMap> static_shadows;      // what objects change in the static light
+  // Moving lights (Scene::lights indices; no maps of their own) and the panes their bounce light
+  // is made of, shared by all of them. Panes are empty without bounce light.
+  std::vector<int> moving_lights;
+  std::vector<PaneMap> panes;
 };
 
 }  // namespace lightpatch::cooker

@@ -45,6 +45,9 @@ struct ReferenceOptions {
   // left out of the noise figures). Footprints still come from the whole set, so a flagged texel
   // is defined as in a full bake.
   std::vector<uint8_t> region;
+  // A moving light (at the state's pose) lights the texels through bounces only, as a pack holds
+  // it (its direct light is the game's); true: its direct light too (BakeOptions::moving_direct).
+  bool moving_direct = false;
 };
 
 struct ReferenceBake {

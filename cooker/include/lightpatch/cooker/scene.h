@@ -65,6 +65,10 @@ struct Light {
   float outer_cone = 0.785398163f;         // radians (spot), pi/4 default per the spec
   float radius = 0.0f;                     // metres; > 0 gives soft shadows (extras.lightRadius)
   bool semi_dynamic = false;
+  // extras.moving (point and spot lights; implies semi_dynamic): the game moves it. The cook
+  // bakes none of its light into the maps; its bounce light comes from the panes
+  // (docs/moving_lights.md), and its direct light is the game's.
+  bool moving = false;
 };
 
 // A semi-dynamic object: a glTF mesh node marked semiDynamic, possibly several primitives.

@@ -20,6 +20,11 @@ struct LightOverride {
   float color[3] = {1, 1, 1};
   bool has_intensity = false;
   float intensity = 1;
+  // A moving light's pose (world space, metres; direction: unit after parsing).
+  bool has_position = false;
+  float position[3] = {0, 0, 0};
+  bool has_direction = false;
+  float direction[3] = {0, 0, -1};
 };
 struct StateSpec {
   std::map<std::string, LightOverride> lights;
@@ -36,9 +41,12 @@ std::vector<StateSpec> parse_states_jsonl(const std::string& text, const std::st
 struct ResolvedState {
   std::vector<glm::vec3> radiant;  // per Scene::lights: colour * intensity, (0,0,0) when off
   std::vector<uint8_t> visible;    // per Scene::objects: 1 = present
+  // per Scene::lights: the pose (the authored one unless the state moves a moving light)
+  std::vector<glm::vec3> position, direction;
 };
 // Static lights keep their authored colour and intensity; throws CookError when the state changes
-// a static light or names a light or object the scene lacks (or has not marked semiDynamic).
+// a static light, moves a light not marked moving, or names a light or object the scene lacks (or
+// has not marked semiDynamic).
 ResolvedState resolve_state(const Scene& scene, const StateSpec& state);
 
 }  // namespace lightpatch::cooker

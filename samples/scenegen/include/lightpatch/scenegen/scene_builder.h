@@ -87,6 +87,7 @@ struct Node {
   bool semi_dynamic = false;          // extras.semiDynamic
   float light_radius = 0.0f;          // > 0 writes extras.lightRadius (metres)
   bool cast_shadows = true;           // false writes extras.castShadows = false (a flame, a bulb)
+  bool moving = false;                // extras.moving (a light the game moves)
 };
 
 enum class BufferStorage {

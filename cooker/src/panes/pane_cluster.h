@@ -1,0 +1,36 @@
+// The moving lights' panes (docs/moving_lights.md; Szecsi & Szirmay-Kalos, precomputed radiance
+// maps, section 3): the static surfaces' texels clustered into patches that are close and alike
+// in orientation, each with the entry points and the depth map the runtime weighs it by
+// (pack_format.h, PaneRecord).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lightpatch/cooker/maps.h"
+#include "lightpatch/cooker/scene.h"
+#include "lightpatch/cooker/texels.h"
+#include "lightpatch/cooker/tracer.h"
+
+namespace lightpatch::cooker {
+
+struct PaneClusterOptions {
+  int panes = 32;  // panes before the line-of-sight refinement (at most four times this after it)
+  int threads = 1;
+};
+
+// Clusters the valid texels of static meshes that stop rays (not a flame, not an object) into
+// panes: by the dominant axis of their normal, then split at the median of the longest side of
+// the widest pane until there are options.panes, then every pane whose entry points do not all
+// see its eye split again (a pane must not reach round a wall), up to four times as many.
+// Deterministic. Returns the panes with record (light 0) and texels set, maps empty.
+std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
+                                   const PaneClusterOptions& options);
+
+// A pane map's significance (irradiance per unit irradiance on the pane): it keeps what shows as
+// half an 8-bit step (`step`: the output step, or half of it for patches) with the brightest
+// moving light 1 m from the pane, where its weight is that light's intensity; nearer, the weight
+// and the step grow together. The bake's series and the pack's patches use this one rule.
+float pane_significance(const Scene& scene, float step);
+
+}  // namespace lightpatch::cooker

@@ -1,0 +1,162 @@
+#include "lightpatch/moving_lights.h"
+
+#include <cfloat>
+#include <cmath>
+
+#include "lightpatch/pack_view.h"
+#include "lightpatch/scene_state.h"
+
+namespace lightpatch {
+
+using namespace pack;
+
+namespace {
+
+float dot3(const float a[3], const float b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+float clamp01(float v) {
+  return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
+}
+
+// KHR_lights_punctual's range window, as cooker/src/direct_light.cpp's range_window().
+float range_window(float range, float d) {
+  if (!(range > 0.0f)) return 1.0f;
+  const float x = d / range;
+  const float x2 = x * x;
+  return clamp01(1.0f - x2 * x2);
+}
+
+}  // namespace
+
+bool normalise_pose(LightPose* pose) {
+  double p2 = 0.0, d2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(pose->position[a]) || !std::isfinite(pose->direction[a])) return false;
+    p2 += double(pose->position[a]) * pose->position[a];
+    d2 += double(pose->direction[a]) * pose->direction[a];
+  }
+  if (!(p2 <= kMaxPosePosition * kMaxPosePosition)) return false;
+  const double len = std::sqrt(d2);
+  if (!(std::fabs(len - 1.0) <= kPoseUnitTolerance)) return false;
+  for (float& c : pose->direction) c = float(c / len);
+  return true;
+}
+
+LightPose authored_pose(const MovingLightRecord& light) {
+  LightPose p{};
+  for (int a = 0; a < 3; ++a) {
+    p.position[a] = light.position[a];
+    p.direction[a] = light.direction[a];
+  }
+  return p;
+}
+
+void pane_depth_direction(const float normal[3], uint32_t x, uint32_t y, float out_dir[3]) {
+  constexpr float n = float(kPaneDepthSize);
+  const float s = (float(x) + 0.5f) / n * 2.0f - 1.0f;
+  const float r = (float(y) + 0.5f) / n * 2.0f - 1.0f;
+  float p = (s + r) * 0.5f;
+  float q = (s - r) * 0.5f;
+  const float l1 = std::fabs(p) + std::fabs(q);
+  if (l1 > 1.0f) {  // never for a texel centre (see the header); kept for any other (s, r)
+    p /= l1;
+    q /= l1;
+  }
+  const float z = std::fmax(0.0f, 1.0f - std::fabs(p) - std::fabs(q));
+  float t[3], b[3];
+  orthonormal_basis(normal, t, b);
+  float d[3];
+  for (int a = 0; a < 3; ++a) d[a] = p * t[a] + q * b[a] + z * normal[a];
+  const float len = std::sqrt(dot3(d, d));
+  for (int a = 0; a < 3; ++a) out_dir[a] = d[a] / len;
+}
+
+float pane_visibility(const PaneRecord& pane, const float light_position[3]) {
+  float d[3];
+  for (int a = 0; a < 3; ++a) d[a] = light_position[a] - pane.eye[a];
+  const float dn = dot3(d, pane.normal);
+  if (!(dn > 0.0f)) return 0.0f;  // behind the pane (or NaN)
+  float t[3], b[3];
+  orthonormal_basis(pane.normal, t, b);
+  const float dt = dot3(d, t), db = dot3(d, b);
+  const float l1 = std::fabs(dt) + std::fabs(db) + dn;  // > 0: dn > 0
+  const float p = dt / l1, q = db / l1;
+  constexpr uint32_t kN = kPaneDepthSize;
+  const float u = (p + q + 1.0f) * 0.5f * float(kN) - 0.5f;
+  const float v = (p - q + 1.0f) * 0.5f * float(kN) - 0.5f;
+  // |p| + |q| <= 1 keeps u and v within [-0.5, N - 0.5]: the texel indices below are in range
+  // once clamped.
+  const float fu = std::floor(u), fv = std::floor(v);
+  const float wu = u - fu, wv = v - fv;
+  auto clampi = [](float f) { return f < 0.0f ? 0u : (f > float(kN - 1) ? kN - 1 : uint32_t(f)); };
+  const uint32_t x0 = clampi(fu), x1 = clampi(fu + 1.0f);
+  const uint32_t y0 = clampi(fv), y1 = clampi(fv + 1.0f);
+  const float dist = std::sqrt(dot3(d, d));
+  auto clear = [&](uint32_t x, uint32_t y) {
+    const uint16_t depth = pane.depth[y * kN + x];
+    if (depth == 0xFFFFu) return 1.0f;  // no surface within depth_range
+    return dist <= float(depth) / 65535.0f * pane.depth_range ? 1.0f : 0.0f;
+  };
+  const float top = clear(x0, y0) * (1.0f - wu) + clear(x1, y0) * wu;
+  const float bottom = clear(x0, y1) * (1.0f - wu) + clear(x1, y1) * wu;
+  return clamp01(top * (1.0f - wv) + bottom * wv);
+}
+
+float pane_weight(const MovingLightRecord& light, uint32_t type, const LightPose& pose,
+                  const PaneRecord& pane) {
+  const float visibility = pane_visibility(pane, pose.position);
+  if (!(visibility > 0.0f)) return 0.0f;
+  const bool spot = type == kLightSpot;
+  float cone_scale = 0.0f, cone_offset = 0.0f;
+  if (spot) {  // direct_light.cpp's spot_attenuation(), computed once per pane
+    const float cos_outer = std::cos(light.outer_cone);
+    cone_scale = 1.0f / std::fmax(0.001f, std::cos(light.inner_cone) - cos_outer);
+    cone_offset = -cos_outer * cone_scale;
+  }
+  const float floor2 = pane.radius * pane.radius;
+  const uint32_t m = pane.point_count < kMaxPanePoints ? pane.point_count : kMaxPanePoints;
+  float sum = 0.0f;
+  for (uint32_t i = 0; i < m; ++i) {
+    const PanePoint& pt = pane.points[i];
+    float l[3];
+    for (int a = 0; a < 3; ++a) l[a] = pose.position[a] - pt.position[a];
+    const float d2 = dot3(l, l);
+    const float d = std::sqrt(d2);
+    if (!(d > 0.0f) || !std::isfinite(d)) continue;
+    for (float& c : l) c /= d;
+    const float cos_theta = dot3(pt.normal, l);
+    if (!(cos_theta > 0.0f)) continue;
+    float e = cos_theta / std::fmax(d2, floor2) * range_window(light.range, d);
+    if (spot) {
+      const float a = clamp01(
+          -(pose.direction[0] * l[0] + pose.direction[1] * l[1] + pose.direction[2] * l[2]) *
+              cone_scale +
+          cone_offset);
+      e *= a * a;
+    }
+    sum += e;
+  }
+  const float w = visibility * (sum / float(m > 0 ? m : 1));
+  return std::isfinite(w) ? w : FLT_MAX;
+}
+
+void pane_factor(const PackView& pack, uint32_t pane, const SceneState& state, float out_rgb[3]) {
+  out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
+  const PaneRecord& pr = pack.pane(pane);
+  for (uint32_t k = 0; k < pack.moving_light_count(); ++k) {
+    const MovingLightRecord& m = pack.moving_light(k);
+    float f[3];
+    state.light_factor(m.light, f);
+    if (f[0] == 0.0f && f[1] == 0.0f && f[2] == 0.0f) continue;  // off: no visibility lookup
+    const float w = pane_weight(m, pack.light(m.light).type, state.light_pose(m.light), pr);
+    for (int c = 0; c < 3; ++c) {
+      const float v = out_rgb[c] + f[c] * w;
+      // Finite as every factor is: 0 * f stays 0 and the planner refuses what is too bright.
+      out_rgb[c] = std::isfinite(v) ? v : FLT_MAX;
+    }
+  }
+}
+
+}  // namespace lightpatch

@@ -1,0 +1,264 @@
+// Moving lights (docs/moving_lights.md): a lantern marked "moving" in its glTF extras is imported
+// as such, a state moves it, the cook stores its bounce light as panes, and the runtime's CPU
+// reference recomposes that bounce light for a pose close to `bake-state` of the same pose (which
+// holds the moving light's bounce light only), without light through the partition, continuous
+// in the light's position.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "gltf_files.h"
+#include "lightpatch/cooker/cook.h"
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/moving_lights.h"
+#include "lightpatch/pack_view.h"
+#include "lightpatch/scene_state.h"
+
+namespace lightpatch::cooker {
+namespace {
+
+std::string write_two_rooms() {
+  char path[] = "/tmp/lightpatch-moving-XXXXXX.glb";
+  const int fd = ::mkstemps(path, 4);
+  if (fd < 0) return {};
+  ::close(fd);
+  test::two_rooms_lantern().write(path);
+  return path;
+}
+
+int light_index(const Scene& s, const std::string& name) {
+  for (size_t i = 0; i < s.lights.size(); ++i)
+    if (s.lights[i].name == name) return int(i);
+  return -1;
+}
+
+TEST(MovingLights, ImportMarksTheLanternAndAStateMovesIt) {
+  const std::string path = write_two_rooms();
+  ASSERT_FALSE(path.empty());
+  const Scene scene = import_gltf(path);
+  std::remove(path.c_str());
+  const int lantern = light_index(scene, "lantern"), lamp = light_index(scene, "lamp_b");
+  ASSERT_GE(lantern, 0);
+  ASSERT_GE(lamp, 0);
+  EXPECT_TRUE(scene.lights[size_t(lantern)].moving);
+  EXPECT_TRUE(scene.lights[size_t(lantern)].semi_dynamic);  // moving implies switchable
+  EXPECT_FALSE(scene.lights[size_t(lamp)].moving);
+
+  const StateSpec moved = parse_state_json(
+      R"({"lights": {"lantern": {"position": [1, 2, 3], "direction": [0, 0, -2]}}})", "test");
+  const ResolvedState r = resolve_state(scene, moved);
+  EXPECT_EQ(r.position[size_t(lantern)], glm::vec3(1, 2, 3));
+  EXPECT_EQ(r.direction[size_t(lantern)], glm::vec3(0, 0, -1));  // normalised
+  EXPECT_EQ(r.position[size_t(lamp)], scene.lights[size_t(lamp)].position);
+  // Only a moving light moves; a position must be 3 finite numbers.
+  EXPECT_THROW(resolve_state(scene, parse_state_json(
+                                        R"({"lights": {"lamp_b": {"position": [0, 1, 0]}}})", "t")),
+               CookError);
+  EXPECT_THROW(parse_state_json(R"({"lights": {"lantern": {"position": [0, 1]}}})", "t"),
+               CookError);
+  EXPECT_THROW(parse_state_json(R"({"lights": {"lantern": {"direction": [0, 0, 0]}}})", "t"),
+               CookError);
+}
+
+struct Cooked {
+  PreparedScene p;
+  BakeOptions bake;
+  Report report;
+  std::vector<uint8_t> pack;
+  PackView view;
+  int lantern = -1;  // pack light index
+};
+
+void cook(Cooked& c) {
+  const std::string path = write_two_rooms();
+  ASSERT_FALSE(path.empty());
+  LayoutOptions lo;
+  lo.lightmap_size = 128;
+  Progress progress(true);
+  c.p = prepare_scene(path, lo, progress, c.report);
+  std::remove(path.c_str());
+  c.bake.quality = Quality::kDraft;
+  c.bake.gather_rays = 64;
+  c.bake.probes.enabled = false;
+  c.bake.panes = 64;
+  c.pack = cook_pack(c.p, c.bake, progress, c.report);
+  Error error;
+  ASSERT_EQ(PackView::open(c.pack.data(), c.pack.size(), &c.view, &error), Status::kOk)
+      << error.message;
+  c.lantern = c.view.find_light("lantern", 7);
+}
+
+StateSpec lantern_at(const glm::vec3& p) {
+  StateSpec s;
+  s.lights["lantern"].has_position = true;
+  for (int k = 0; k < 3; ++k) s.lights["lantern"].position[k] = p[k];
+  return s;
+}
+
+StateSpec lantern_off() {
+  StateSpec s;
+  s.lights["lantern"].has_on = true;
+  s.lights["lantern"].on = false;
+  return s;
+}
+
+// The CPU reference's light map (light map + magnified indirect map) for a state.
+std::vector<float> recompose(const Cooked& c, const StateSpec& spec) {
+  SceneState state;
+  Error error;
+  EXPECT_EQ(state.init(c.view, &error), Status::kOk);
+  const auto& o = spec.lights.count("lantern") ? spec.lights.at("lantern") : LightOverride{};
+  if (o.has_on) {
+    EXPECT_EQ(state.set_light_on(uint32_t(c.lantern), o.on), Status::kOk);
+  }
+  if (o.has_position) {
+    LightPose pose = state.light_pose(uint32_t(c.lantern));
+    for (int k = 0; k < 3; ++k) pose.position[k] = o.position[k];
+    EXPECT_EQ(state.set_light_pose(uint32_t(c.lantern), pose), Status::kOk);
+  }
+  CpuRecomposer r;
+  EXPECT_EQ(r.init(c.view, &error), Status::kOk);
+  EXPECT_EQ(r.rebuild(state), Status::kOk);
+  const size_t n = size_t(c.view.lightmap_width()) * c.view.lightmap_height() * 3;
+  return std::vector<float>(r.rgb(), r.rgb() + n);
+}
+
+std::vector<float> baked(Cooked& c, const StateSpec& spec) {
+  Progress progress(true);
+  return cook_state(c.p, spec, c.bake, progress, c.report).data;
+}
+
+// The moving light's bounce light alone: the map at its pose less the map with it off.
+std::vector<float> minus(const std::vector<float>& a, const std::vector<float>& b) {
+  std::vector<float> d(a.size());
+  for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
+  return d;
+}
+
+struct Agreement {
+  double rel_rmse = 0.0, bias = 0.0;
+};
+
+// Over the valid texels of room A and B (x within the rooms' inner walls).
+Agreement agreement(const Cooked& c, const std::vector<float>& got, const std::vector<float>& want,
+                    float x_min = -1e9f, float x_max = 1e9f) {
+  double sq = 0.0, ref_sq = 0.0, sum = 0.0, ref_sum = 0.0;
+  for (size_t t = 0; t < c.p.texels.valid.size(); ++t) {
+    if (!c.p.texels.valid[t]) continue;
+    const float x = c.p.texels.position[t].x;
+    if (x < x_min || x > x_max) continue;
+    for (int k = 0; k < 3; ++k) {
+      const double d = double(got[t * 3 + size_t(k)]) - want[t * 3 + size_t(k)];
+      sq += d * d;
+      ref_sq += double(want[t * 3 + size_t(k)]) * want[t * 3 + size_t(k)];
+      sum += got[t * 3 + size_t(k)];
+      ref_sum += want[t * 3 + size_t(k)];
+    }
+  }
+  Agreement a;
+  a.rel_rmse = ref_sq > 0.0 ? std::sqrt(sq / ref_sq) : 0.0;
+  a.bias = ref_sum != 0.0 ? sum / ref_sum - 1.0 : 0.0;
+  return a;
+}
+
+TEST(MovingLights, PanesRecomposeTheLanternsBounceLight) {
+  Cooked c;
+  cook(c);
+  ASSERT_GE(c.lantern, 0);
+  EXPECT_EQ(c.view.moving_light_count(), 1u);
+  EXPECT_GE(c.view.pane_count(), 64u);
+  EXPECT_GE(c.view.moving_index(uint32_t(c.lantern)), 0);
+  EXPECT_TRUE(c.view.has_indirect_map());  // auto lays the charts on blocks for the panes
+
+  const std::vector<float> rec_off = recompose(c, lantern_off());
+  const std::vector<float> bake_off = baked(c, lantern_off());
+  // A pose in room A, one in the doorway, one in room B.
+  const glm::vec3 poses[] = {{-2.0f, 1.2f, -1.0f}, {0.0f, 1.2f, 1.5f}, {2.0f, 1.2f, 1.5f}};
+  for (const glm::vec3& pose : poses) {
+    const std::vector<float> got = minus(recompose(c, lantern_at(pose)), rec_off);
+    const std::vector<float> want = minus(baked(c, lantern_at(pose)), bake_off);
+    const Agreement a = agreement(c, got, want);
+    std::printf(
+        "lantern at (%.1f, %.1f, %.1f): bounce light relative RMSE %.1f %%, bias %+.1f %%\n",
+        pose.x, pose.y, pose.z, 100.0 * a.rel_rmse, 100.0 * a.bias);
+    // Measured on this scene at 64 panes (refined to 256): 16-33 % and -16..+1 % on a 256 page
+    // (docs/moving_lights.md). The bars catch a lost pane, a wrong weight or a missing bounce.
+    EXPECT_LT(a.rel_rmse, 0.45);
+    EXPECT_LT(std::fabs(a.bias), 0.25);
+  }
+
+  // No light through the partition: with the lantern in room A's far corner, room B (beyond the
+  // doorway's reach as much as bake-state's own) gets at most a little more than bake-state says.
+  {
+    const glm::vec3 corner(-3.5f, 1.2f, -1.5f);
+    const std::vector<float> got = minus(recompose(c, lantern_at(corner)), rec_off);
+    const std::vector<float> want = minus(baked(c, lantern_at(corner)), bake_off);
+    double got_b = 0.0, want_b = 0.0, want_a = 0.0;
+    for (size_t t = 0; t < c.p.texels.valid.size(); ++t) {
+      if (!c.p.texels.valid[t]) continue;
+      const float x = c.p.texels.position[t].x;
+      for (int k = 0; k < 3; ++k) {
+        if (x > 0.15f) {
+          got_b += got[t * 3 + size_t(k)];
+          want_b += want[t * 3 + size_t(k)];
+        }
+        if (x < -0.15f) want_a += want[t * 3 + size_t(k)];
+      }
+    }
+    std::printf("lantern in room A's corner: room B gets %.3g (bake-state %.3g), room A %.3g\n",
+                got_b, want_b, want_a);
+    EXPECT_LT(got_b, 2.0 * want_b + 0.01 * want_a);
+  }
+
+  // No flicker: a 1 cm step of the light changes its recomposed bounce light by little.
+  {
+    const glm::vec3 p0(-1.5f, 1.3f, -0.5f), p1 = p0 + glm::vec3(0.01f, 0.0f, 0.0f);
+    const std::vector<float> a = minus(recompose(c, lantern_at(p0)), rec_off);
+    const std::vector<float> b = minus(recompose(c, lantern_at(p1)), rec_off);
+    double peak = 0.0, step = 0.0;
+    for (size_t t = 0; t < c.p.texels.valid.size(); ++t) {
+      if (!c.p.texels.valid[t]) continue;
+      for (int k = 0; k < 3; ++k) {
+        peak = std::max(peak, double(std::fabs(a[t * 3 + size_t(k)])));
+        step = std::max(step, double(std::fabs(a[t * 3 + size_t(k)] - b[t * 3 + size_t(k)])));
+      }
+    }
+    std::printf("1 cm step: largest texel change %.3g of a peak %.3g\n", step, peak);
+    EXPECT_LT(step, 0.03 * peak);
+  }
+}
+
+TEST(MovingLights, BakeStateHoldsTheMovingLightsBounceOnlyUnlessAsked) {
+  Cooked c;
+  cook(c);
+  const glm::vec3 pose(-2.0f, 1.2f, -1.0f);
+  const std::vector<float> bounce = baked(c, lantern_at(pose));
+  c.bake.moving_direct = true;
+  const std::vector<float> lit = baked(c, lantern_at(pose));
+  // The rug's texel under the lantern: its direct light, 3 cd * cos / d^2 (about 2.2 lux in the
+  // red channel, colour (1, 0.8, 0.55)), is what only the picture option adds.
+  size_t under = 0;
+  float best = 1e9f;
+  for (size_t t = 0; t < c.p.texels.valid.size(); ++t) {
+    if (!c.p.texels.valid[t] || c.p.texels.normal[t].y < 0.9f) continue;
+    if (c.p.texels.position[t].y < 0.015f) continue;  // the rug's top, 2 cm up
+    const glm::vec3 d = c.p.texels.position[t] - glm::vec3(pose.x, 0.0f, pose.z);
+    if (glm::length(d) < best) {
+      best = glm::length(d);
+      under = t;
+    }
+  }
+  ASSERT_LT(best, 0.1f);
+  const glm::vec3 to = pose - c.p.texels.position[under];
+  const float expected = 3.0f * (to.y / glm::length(to)) / glm::dot(to, to);
+  const float direct = lit[under * 3] - bounce[under * 3];
+  EXPECT_NEAR(direct, expected, 0.1f * expected);
+}
+
+}  // namespace
+}  // namespace lightpatch::cooker
