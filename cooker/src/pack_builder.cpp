@@ -377,12 +377,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
   // The panes, after the lights and the moving lights in the light table.
   const float pane_threshold_at = pane_significance(scene, half_step);
-  float strongest_moving = 0.0f;
-  for (int li : maps.moving_lights) {
-    const Light& l = scene.lights[size_t(li)];
-    strongest_moving = std::max(strongest_moving, max3(l.color) * l.intensity);
-  }
-  if (!(strongest_moving > 0.0f) || !std::isfinite(strongest_moving)) strongest_moving = 1.0f;
+  const float strongest_moving = strongest_moving_light(scene);
   const size_t first_pane = maps.lights.size() + maps.moving_lights.size();
   for (size_t k = 0; k < maps.panes.size(); ++k) {
     const PaneMap& pm = maps.panes[k];
@@ -622,10 +617,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   c.lightmap_width = uint32_t(layout.width);
   c.lightmap_height = uint32_t(layout.height);
   c.indirect_scale = any_split ? uint32_t(scale) : 0;
-  for (size_t i = 0; i < maps.lights.size(); ++i) {
-    const Light& l = scene.lights[size_t(maps.lights[i])];
+  // A scene light's record: its name (or light_<index>), authored colour, intensity and type.
+  auto light_record = [&](int li) {
+    const Light& l = scene.lights[size_t(li)];
     LightRecord r{};
-    const std::string name = l.name.empty() ? "light_" + std::to_string(maps.lights[i]) : l.name;
+    const std::string name = l.name.empty() ? "light_" + std::to_string(li) : l.name;
     c.add_name(name, &r.name_offset, &r.name_length);
     for (int k = 0; k < 3; ++k) r.color[k] = l.color[k];
     r.intensity = l.intensity;
@@ -636,18 +632,14 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     r.type = l.type == LightType::kPoint  ? kLightPoint
              : l.type == LightType::kSpot ? kLightSpot
                                           : kLightDirectional;
-    c.lights.push_back(r);
-  }
+    return r;
+  };
+  for (int li : maps.lights) c.lights.push_back(light_record(li));
   // Moving lights (no groups) and the panes (pack_format.h, "Moving lights"); a pane's authored
   // colour is its factor for the moving lights' authored poses, by the runtime's own weights.
   for (int li : maps.moving_lights) {
     const Light& l = scene.lights[size_t(li)];
-    LightRecord r{};
-    const std::string name = l.name.empty() ? "light_" + std::to_string(li) : l.name;
-    c.add_name(name, &r.name_offset, &r.name_length);
-    for (int k = 0; k < 3; ++k) r.color[k] = l.color[k];
-    r.intensity = l.intensity;
-    r.type = l.type == LightType::kPoint ? kLightPoint : kLightSpot;
+    LightRecord r = light_record(li);
     r.flags = kLightFlagMoving;
     MovingLightRecord m{};
     m.light = uint32_t(c.lights.size());

@@ -122,14 +122,18 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     return std::uniform_int_distribution<uint32_t>(a, b)(rng);
   };
   std::string strings;
+  // Appends a name to the string section; where a record finds it.
+  auto add_name = [&strings](const std::string& name, uint32_t* offset, uint32_t* length) {
+    *offset = uint32_t(strings.size());
+    *length = uint32_t(name.size());
+    strings += name;
+  };
   std::vector<LightRecord> lights;
   std::vector<ObjectRecord> objects;
   for (uint32_t l = 0; l < o.lights; ++l) {
     const std::string name = "light_" + std::to_string(l);
     LightRecord r{};
-    r.name_offset = uint32_t(strings.size());
-    r.name_length = uint32_t(name.size());
-    strings += name;
+    add_name(name, &r.name_offset, &r.name_length);
     for (float& c : r.color) c = uniform(0.2f, 1.0f);
     r.intensity = uniform(0.5f, 4.0f) * o.intensity;
     r.type = kLightPoint;
@@ -138,9 +142,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   for (uint32_t i = 0; i < o.objects; ++i) {
     const std::string name = "object_" + std::to_string(i);
     ObjectRecord r{};
-    r.name_offset = uint32_t(strings.size());
-    r.name_length = uint32_t(name.size());
-    strings += name;
+    add_name(name, &r.name_offset, &r.name_length);
     objects.push_back(r);
   }
   // Moving lights and panes after the others (no random draws: packs without them are unchanged).
@@ -150,9 +152,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   for (uint32_t k = 0; k < o.moving_lights; ++k) {
     const std::string name = "moving_" + std::to_string(k);
     LightRecord r{};
-    r.name_offset = uint32_t(strings.size());
-    r.name_length = uint32_t(name.size());
-    strings += name;
+    add_name(name, &r.name_offset, &r.name_length);
     r.color[0] = 1.0f;
     r.color[1] = 0.8f;
     r.color[2] = 0.6f;
@@ -338,10 +338,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
       for (int a = 0; a < 3; ++a)
         r.position[a] = o.probe_origin[a] + uniform(0.0f, float(o.probe_grid[a])) * o.probe_spacing;
       reach(r);
-      const std::string name = "probe_" + std::to_string(n);
-      r.name_offset = uint32_t(strings.size());
-      r.name_length = uint32_t(name.size());
-      strings += name;
+      add_name("probe_" + std::to_string(n), &r.name_offset, &r.name_length);
       probes.push_back(r);
     }
     // Sets in sorted order, from the map's groups (pair corrections have none).

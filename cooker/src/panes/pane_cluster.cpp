@@ -60,14 +60,19 @@ bool split(Cluster& c, Cluster& other, const TexelSet& texels) {
   return true;
 }
 
-// The index of the widest cluster that can be split among those `eligible` accepts, or -1.
+// Splits the widest cluster that can be split among those `eligible` accepts, its second half
+// appended; its index, or -1 when there is none.
 template <typename Eligible>
-int widest(const std::vector<Cluster>& clusters, const Eligible& eligible) {
+int split_widest(std::vector<Cluster>& clusters, const TexelSet& texels, const Eligible& eligible) {
   int best = -1;
   for (size_t i = 0; i < clusters.size(); ++i) {
     if (clusters[i].texels.size() < 2 || !eligible(clusters[i])) continue;
     if (best < 0 || clusters[i].extent() > clusters[size_t(best)].extent()) best = int(i);
   }
+  if (best < 0) return -1;
+  Cluster other;
+  split(clusters[size_t(best)], other, texels);
+  clusters.push_back(std::move(other));
   return best;
 }
 
@@ -209,14 +214,17 @@ bool describe(const std::vector<uint32_t>& members, const TexelSet& texels, cons
 
 }  // namespace
 
-float pane_significance(const Scene& scene, float step) {
+float strongest_moving_light(const Scene& scene) {
   float strongest = 0.0f;
   for (const Light& l : scene.lights) {
     if (l.moving)
       strongest = std::max(strongest, std::max({l.color.x, l.color.y, l.color.z}) * l.intensity);
   }
-  if (!(strongest > 0.0f) || !std::isfinite(strongest)) strongest = 1.0f;
-  return step / strongest;
+  return strongest > 0.0f && std::isfinite(strongest) ? strongest : 1.0f;
+}
+
+float pane_significance(const Scene& scene, float step) {
+  return step / strongest_moving_light(scene);
 }
 
 std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
@@ -241,34 +249,23 @@ std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, c
   const size_t target = size_t(std::max(options.panes, 1));
   auto any = [](const Cluster&) { return true; };
   while (clusters.size() < target) {
-    const int i = widest(clusters, any);
-    if (i < 0) break;
-    Cluster other;
-    split(clusters[size_t(i)], other, texels);
-    clusters.push_back(std::move(other));
+    if (split_widest(clusters, texels, any) < 0) break;
   }
   const float scale = scene.scale();
   std::vector<pack::PaneRecord> records(clusters.size());
-  auto describe_all = [&](size_t first) {
-    parallel_for(int(clusters.size() - first), options.threads, [&](int k) {
-      const size_t i = first + size_t(k);
-      clusters[i].sees_eye = describe(clusters[i].texels, texels, tracer, scale, records[i]);
-    });
+  auto describe_one = [&](size_t i) {
+    clusters[i].sees_eye = describe(clusters[i].texels, texels, tracer, scale, records[i]);
   };
-  describe_all(0);
+  parallel_for(int(clusters.size()), options.threads, [&](int i) { describe_one(size_t(i)); });
   // Line-of-sight refinement: split the widest pane whose points do not all see its eye.
   const size_t limit = 4 * target;
   auto blind = [](const Cluster& c) { return !c.sees_eye; };
   while (clusters.size() < limit) {
-    const int i = widest(clusters, blind);
+    const int i = split_widest(clusters, texels, blind);
     if (i < 0) break;
-    Cluster other;
-    split(clusters[size_t(i)], other, texels);
-    clusters.push_back(std::move(other));
     records.resize(clusters.size());
-    clusters[size_t(i)].sees_eye =
-        describe(clusters[size_t(i)].texels, texels, tracer, scale, records[size_t(i)]);
-    describe_all(clusters.size() - 1);
+    describe_one(size_t(i));
+    describe_one(clusters.size() - 1);
   }
   std::vector<PaneMap> panes(clusters.size());
   for (size_t i = 0; i < clusters.size(); ++i) {

@@ -32,5 +32,8 @@ std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, c
 // moving light 1 m from the pane, where its weight is that light's intensity; nearer, the weight
 // and the step grow together. The bake's series and the pack's patches use this one rule.
 float pane_significance(const Scene& scene, float step);
+// The brightest moving light's max(colour) * intensity (1 when there is none or it is 0): the
+// weight a pane map is significant at, as pane_significance() and the pack's colour rule use it.
+float strongest_moving_light(const Scene& scene);
 
 }  // namespace lightpatch::cooker
