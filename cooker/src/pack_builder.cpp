@@ -50,12 +50,16 @@ float max3(const glm::vec3& v) {
 // half a step of the map's own peak where that is finer, so that a light far dimmer than the
 // others, or static light far dimmer than the semi-dynamic lights, still recomposes alone to 8
 // bits when the bright ones are off (the baker's rule, bake.cpp).
+float significance_of_peak(float peak, float at_authored) {
+  return peak > 0.0f ? std::min(at_authored, 0.5f * peak / 255.0f) : at_authored;
+}
+
 float significance(const FloatImage& map, float at_authored) {
   float peak = 0.0f;
   for (float v : map.data) {
     if (std::isfinite(v)) peak = std::max(peak, v);
   }
-  return peak > 0.0f ? std::min(at_authored, 0.5f * peak / 255.0f) : at_authored;
+  return significance_of_peak(peak, at_authored);
 }
 
 // A patch as stored: source patch `source` whole (destination -1), or its channel `destination`
@@ -194,8 +198,11 @@ bool negligible(const ProbeEntry& e, float threshold) {
   return std::max({bound[0], bound[1], bound[2]}) < threshold;
 }
 
+// `light_threshold` holds the semi-dynamic lights' significance, `pane_threshold` the panes'
+// (pack lights first_pane + k); the moving lights between them have no sets.
 void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count,
-                const std::vector<float>& light_threshold, float base_threshold, PackContents& c) {
+                const std::vector<float>& light_threshold, size_t first_pane,
+                const std::vector<float>& pane_threshold, float base_threshold, PackContents& c) {
   if (bake.probes.empty()) return;
   if (bake.probes.size() > kMaxProbes) {
     throw CookError(std::to_string(bake.probes.size()) + " light probes, over the format's " +
@@ -237,6 +244,12 @@ void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count,
     r.light = owner(s.light, light_count, "light");
     r.object_a = owner(s.object, object_count, "object");
     r.object_b = kNone16;
+    const bool pane = s.light >= 0 && size_t(s.light) >= first_pane;
+    if (s.light >= 0 && size_t(s.light) >= light_threshold.size() &&
+        (!pane || s.kind != kGroupContribution || s.object >= 0)) {
+      throw CookError("probe set of light " + std::to_string(s.light) +
+                      ": a moving light has no probe sets, a pane only its contribution");
+    }
     sets.emplace_back(r, &s);
   }
   auto key = [](const ProbeSetRecord& r) {
@@ -249,7 +262,10 @@ void add_probes(const ProbeBake& bake, size_t light_count, size_t object_count,
     if (i > 0 && key(sets[i - 1].first) == key(r)) throw CookError("two probe sets of one owner");
     r.first_entry = uint32_t(c.probe_entries.size());
     // The patches' rule: what stays below the set's significance is not stored.
-    const float threshold = r.light == kNone16 ? base_threshold : light_threshold[r.light];
+    const float threshold = r.light == kNone16 ? base_threshold
+                            : r.light < light_threshold.size()
+                                ? light_threshold[r.light]
+                                : pane_threshold[r.light - first_pane];
     for (const ProbeEntry& e : sets[i].second->entries)
       if (!negligible(e, threshold)) c.probe_entries.push_back(e);
     if (c.probe_entries.size() > 0xFFFFFFFFu) throw CookError("too many probe entries");
@@ -379,18 +395,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   const float pane_threshold_at = pane_significance(scene, half_step);
   const float strongest_moving = strongest_moving_light(scene);
   const size_t first_pane = maps.lights.size() + maps.moving_lights.size();
+  std::vector<float> pane_threshold(maps.panes.size());
   for (size_t k = 0; k < maps.panes.size(); ++k) {
     const PaneMap& pm = maps.panes[k];
+    const bool blocks_only = pm.map.data.empty();  // PaneMap: its block image holds it
+    pane_threshold[k] = blocks_only ? significance_of_peak(pm.peak, pane_threshold_at)
+                                    : significance(pm.map, pane_threshold_at);
     MapJob j;
-    j.map = &pm.map;
+    j.map = blocks_only ? nullptr : &pm.map;
     j.indirect = &pm.indirect;
     j.indirect_only = true;
     j.prototype.kind = kGroupContribution;
     j.prototype.light = int(first_pane + k);
     j.prototype.weight = strongest_moving;
-    j.threshold = significance(pm.map, pane_threshold_at);
+    j.threshold = pane_threshold[k];
     j.what = "pane " + std::to_string(k) + " of the moving lights";
-    check_map(pm.map, layout, 3, 3, j.what);
+    if (!blocks_only) check_map(pm.map, layout, 3, 3, j.what);
     jobs.push_back(j);
   }
   std::vector<const ShadowMap*> shadows;
@@ -543,8 +563,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     };
     std::vector<SourcePatch>& plain = per_job[size_t(i)];
     const bool indirect_part = can_split && j.indirect && !j.indirect->data.empty();
-    if (!(j.indirect_only && indirect_part))
+    if (!(j.indirect_only && indirect_part)) {
+      if (!j.map)
+        throw CookError(j.what + ": held as a block image, but the pack has no indirect map");
       cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)]);
+    }
     SplitDecision& sd = split[size_t(i)];
     sd.plain = cost(plain);
     if (indirect_part) {
@@ -796,7 +819,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   }
 
   if (probes != nullptr)
-    add_probes(*probes, c.lights.size(), c.objects.size(), light_threshold, base_threshold, c);
+    add_probes(*probes, c.lights.size(), c.objects.size(), light_threshold, first_pane,
+               pane_threshold, base_threshold, c);
 
   std::vector<uint8_t> bytes = write_pack(c);
   {

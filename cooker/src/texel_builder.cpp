@@ -380,7 +380,8 @@ void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
   for (ShadowMap& s : maps.shadows) all.push_back(&s.map);
   for (PairCorrectionMap& p : maps.pair_corrections) all.push_back(&p.map);
   for (StaticShadowMap& s : maps.static_shadows) all.push_back(&s.map);
-  for (PaneMap& p : maps.panes) all.push_back(&p.map);
+  for (PaneMap& p : maps.panes)
+    if (!p.map.data.empty()) all.push_back(&p.map);  // else its block image alone (PaneMap)
   for (FloatImage* m : all) {
     finalize_map(*m, scene, layout, texels);
     if (progress) progress->advance();

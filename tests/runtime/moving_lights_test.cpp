@@ -1,7 +1,8 @@
 // Moving lights (pack_format.h, "Moving lights"; moving_lights.h): the pane weights against closed
 // forms, the depth map's mapping and its inverse, visibility behind an occluder, the pack
 // validation of the two sections (one refusal per rule, truncation, flipped bytes), SceneState's
-// poses and panes, and the CPU recomposer moving a light against an independent evaluation.
+// poses and panes, and the CPU recomposer and the light probes moving a light against an
+// independent evaluation.
 #include "lightpatch/moving_lights.h"
 
 #include <gtest/gtest.h>
@@ -13,7 +14,9 @@
 #include <vector>
 
 #include "lightpatch/cpu_recomposer.h"
+#include "lightpatch/light_probes.h"
 #include "lightpatch/pack_view.h"
+#include "lightpatch/planner.h"
 #include "lightpatch/scene_state.h"
 #include "runtime/map_reference.h"
 #include "runtime/pack_checks.h"
@@ -531,6 +534,182 @@ TEST(MovingLights, CpuRecomposerMovesTheBounceLightExactly) {
     }
     EXPECT_LT(largest, 1e-5) << (spot ? "spot" : "point");
     EXPECT_GT(moved_panes, 40);  // the panes' factors did change along the walk
+  }
+}
+
+// Every probe's SH from pack_format.h's sum with the lights' factors `factor` (3 per light, the
+// panes' included), in double, and per coefficient the sum of its terms' magnitudes.
+void probe_reference(const PackView& v, const std::vector<float>& factor,
+                     const std::vector<uint8_t>& visible, std::vector<double>* value,
+                     std::vector<double>* magnitude) {
+  value->assign(size_t(v.probe_count()) * kProbeShFloats, 0.0);
+  magnitude->assign(value->size(), 0.0);
+  for (uint32_t s = 0; s < v.probe_set_count(); ++s) {
+    const pack::ProbeSetRecord& set = v.probe_set(s);
+    double f[3] = {1.0, 1.0, 1.0};
+    if (set.kind == pack::kGroupContribution || set.kind == pack::kGroupShadow) {
+      const double sign = set.kind == pack::kGroupShadow ? -1.0 : 1.0;
+      const bool shown = set.kind == pack::kGroupContribution || visible[set.object_a];
+      for (int c = 0; c < 3; ++c) f[c] = shown ? sign * factor[size_t(set.light) * 3 + c] : 0.0;
+    } else if (set.kind == pack::kGroupStaticShadow) {
+      f[0] = f[1] = f[2] = visible[set.object_a] ? -1.0 : 0.0;
+    }
+    for (uint32_t e = set.first_entry; e < set.first_entry + set.entry_count; ++e) {
+      const pack::ProbeEntry& pe = v.probe_entry(e);
+      for (uint32_t i = 0; i < kProbeShFloats; ++i) {
+        const double term = f[i % 3] * double(pe.sh[i]);
+        (*value)[size_t(pe.probe) * kProbeShFloats + i] += term;
+        (*magnitude)[size_t(pe.probe) * kProbeShFloats + i] += std::fabs(term);
+      }
+    }
+  }
+}
+
+SyntheticOptions pane_probe_options(uint32_t seed) {
+  SyntheticOptions o = testing::with_probe_grid(moving_options(seed), 3, 2, 3, seed);
+  o.pane_probe_sets = true;
+  return o;
+}
+
+// A pane's probe set is a contribution set (pack_format.h, "Moving lights"): accepted; a moving
+// light's set and a pane's shadow set are refused.
+TEST(MovingLights, PanesHaveContributionProbeSetsAndMovingLightsNone) {
+  PackView v;
+  ASSERT_EQ(open_message(make_synthetic_pack(pane_probe_options(6)), &v), "");
+  uint32_t pane_sets = 0;
+  for (uint32_t s = 0; s < v.probe_set_count(); ++s)
+    pane_sets += v.probe_set(s).light != pack::kNone16 && v.light_is_pane(v.probe_set(s).light);
+  EXPECT_EQ(pane_sets, v.pane_count());
+  // The first pane's set given to the moving light before it (still sorted).
+  SyntheticOptions o = pane_probe_options(6);
+  o.mutate_probes = [](auto&, auto&, auto&, std::vector<pack::ProbeSetRecord>& sets, auto&) {
+    for (pack::ProbeSetRecord& s : sets) {
+      if (s.kind == pack::kGroupContribution && s.light == 3) s.light = 2;
+    }
+  };
+  EXPECT_NE(open_message(make_synthetic_pack(o)).find("light 2 moves and has no probe sets"),
+            std::string::npos);
+  // The last pane's set made its shadow of object 0 (still sorted: no other shadow sets).
+  o = pane_probe_options(6);
+  o.shadow_probability = 0.0f;
+  o.pair_probability = 0.0f;
+  o.mutate_probes = [](auto&, auto&, auto&, std::vector<pack::ProbeSetRecord>& sets, auto&) {
+    for (pack::ProbeSetRecord& s : sets) {
+      if (s.kind == pack::kGroupContribution && s.light == 5) {
+        s.kind = pack::kGroupShadow;
+        s.object_a = 0;
+      }
+    }
+  };
+  EXPECT_NE(open_message(make_synthetic_pack(o)).find("pane light 5 has only a contribution"),
+            std::string::npos);
+}
+
+// LightProbes weighs the panes' sets by the pane factors, as the light map does: those of the
+// SceneState (from the moving light's pose, on and intensity) along a walk, and the planner's
+// presented ones (what Runtime pushes to it); with the light off the probes are the sum of the
+// other sets, bit for bit.
+TEST(MovingLights, LightProbesFollowTheMovingLightThroughItsPanes) {
+  const SyntheticPack bytes = make_synthetic_pack(pane_probe_options(7));
+  PackView v;
+  ASSERT_EQ(open_message(bytes, &v), "");
+  SceneState st;
+  ASSERT_EQ(st.init(v, nullptr), Status::kOk);
+  LightProbes probes;
+  ASSERT_EQ(probes.init(v, nullptr), Status::kOk);
+  const uint32_t lantern = v.moving_light(0).light;
+  bool on[1] = {true};
+  float intensity[1] = {v.light(lantern).intensity};
+  std::vector<float> factor;
+  std::vector<double> want, magnitude;
+  const std::vector<uint8_t> visible(v.object_count(), 1);
+  std::vector<float> previous;
+  int changed = 0;
+  for (int i = 0; i < 12; ++i) {
+    const float a = 0.5f * float(i);
+    ASSERT_EQ(
+        st.set_light_pose(lantern, pose_at(1.5f * std::cos(a) - 0.5f, 0.5f, 1.2f * std::sin(a))),
+        Status::kOk);
+    if (i == 6) {
+      intensity[0] = 5.0f;
+      ASSERT_EQ(st.set_light_intensity(lantern, intensity[0]), Status::kOk);
+    }
+    ASSERT_EQ(probes.update(st), Status::kOk);
+    const LightPose poses[1] = {st.light_pose(lantern)};
+    reference_factors(v, on, intensity, poses, &factor);
+    probe_reference(v, factor, visible, &want, &magnitude);
+    std::vector<float> now(want.size());
+    for (uint32_t p = 0; p < v.probe_count(); ++p) {
+      probes.probe_sh(p, now.data() + size_t(p) * kProbeShFloats);
+      for (uint32_t k = 0; k < kProbeShFloats; ++k) {
+        const size_t j = size_t(p) * kProbeShFloats + k;
+        ASSERT_NEAR(now[j], want[j], 1e-5 * magnitude[j] + 1e-7) << "step " << i;
+      }
+    }
+    if (!previous.empty()) changed += now != previous ? 1 : 0;
+    previous = now;
+  }
+  EXPECT_EQ(changed, 11);  // every step moved some probe
+
+  // Off: every pane's factor is 0 and the probes are exactly the other sets' sum (the same
+  // additions in the same order as a pack whose panes reach no probe).
+  ASSERT_EQ(st.set_light_on(lantern, false), Status::kOk);
+  ASSERT_EQ(probes.rebuild(st), Status::kOk);
+  for (uint32_t k = 0; k < v.pane_count(); ++k) {
+    float f[3];
+    st.light_factor(v.pane(k).light, f);
+    EXPECT_EQ(f[0] + f[1] + f[2], 0.0f);
+  }
+  std::vector<double> acc(size_t(v.probe_count()) * kProbeShFloats, 0.0);
+  for (uint32_t s = 0; s < v.probe_set_count(); ++s) {
+    const pack::ProbeSetRecord& set = v.probe_set(s);
+    if (set.light != pack::kNone16 && v.light_is_pane(set.light)) continue;
+    float f[3] = {1.0f, 1.0f, 1.0f};
+    if (set.kind == pack::kGroupContribution || set.kind == pack::kGroupShadow) {
+      st.light_factor(set.light, f);
+      if (set.kind == pack::kGroupShadow)
+        for (float& c : f) c = -c;
+    } else if (set.kind == pack::kGroupStaticShadow) {
+      f[0] = f[1] = f[2] = -1.0f;
+    }
+    if (f[0] == 0.0f && f[1] == 0.0f && f[2] == 0.0f) continue;
+    for (uint32_t e = set.first_entry; e < set.first_entry + set.entry_count; ++e) {
+      const pack::ProbeEntry& pe = v.probe_entry(e);
+      for (uint32_t k = 0; k < kProbeShFloats; ++k)
+        acc[size_t(pe.probe) * kProbeShFloats + k] += double(f[k % 3]) * double(pe.sh[k]);
+    }
+  }
+  for (uint32_t p = 0; p < v.probe_count(); ++p) {
+    float sh[kProbeShFloats];
+    probes.probe_sh(p, sh);
+    for (uint32_t k = 0; k < kProbeShFloats; ++k)
+      ASSERT_EQ(sh[k], float(acc[size_t(p) * kProbeShFloats + k])) << "probe " << p;
+  }
+
+  // Through a planner given the pane factors as Runtime gives them: the presented factors.
+  Planner planner;
+  Error error;
+  ASSERT_EQ(planner.init(v, PlannerLimits(), &error), Status::kOk) << error.message;
+  testing::CpuMapSink sink(v, testing::Rounding::kNone);
+  LightProbes presented;
+  ASSERT_EQ(presented.init(v, nullptr), Status::kOk);
+  ASSERT_EQ(st.set_light_on(lantern, true), Status::kOk);
+  ASSERT_EQ(st.set_light_pose(lantern, pose_at(-1.0f, 0.7f, 0.2f)), Status::kOk);
+  for (uint32_t k = 0; k < v.pane_count(); ++k) {
+    float f[3];
+    st.light_factor(v.pane(k).light, f);
+    ASSERT_EQ(planner.set_light(v.pane(k).light, true, f, 1.0f), Status::kOk);
+  }
+  for (int frame = 0; frame < 100 && !planner.idle(); ++frame) planner.update(1u << 30, sink);
+  ASSERT_TRUE(planner.idle());
+  ASSERT_EQ(presented.update(planner), Status::kOk);
+  ASSERT_EQ(probes.update(st), Status::kOk);
+  for (uint32_t p = 0; p < v.probe_count(); ++p) {
+    float a[kProbeShFloats], b[kProbeShFloats];
+    presented.probe_sh(p, a);
+    probes.probe_sh(p, b);
+    for (uint32_t k = 0; k < kProbeShFloats; ++k)
+      ASSERT_NEAR(a[k], b[k], 1e-6f * (1.0f + std::fabs(b[k]))) << "probe " << p;
   }
 }
 

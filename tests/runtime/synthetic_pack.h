@@ -73,6 +73,9 @@ struct SyntheticOptions {
   bool moving_spot = false;
   float moving_range = 0.0f;
   std::function<uint16_t(uint32_t pane, uint32_t x, uint32_t y)> pane_depth;
+  // The panes' contribution groups get probe sets too, drawn like a light's (moving lights get
+  // none; off by default, so that the committed packs stay as they are).
+  bool pane_probe_sets = false;
   // Refusal tests: a contribution group for moving light 0; a shadow group of pane 0 by object 0.
   bool moving_light_group = false;
   bool pane_shadow_group = false;
@@ -344,7 +347,10 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
     // Sets in sorted order, from the map's groups (pair corrections have none).
     for (const GroupRecord& g : groups) {
       if (g.kind == kGroupPairCorrection) continue;
-      if (g.light != kNone16 && g.light >= o.lights) continue;  // moving lights, panes: none
+      const bool pane_set = o.pane_probe_sets && g.kind == kGroupContribution &&
+                            g.light != kNone16 && g.light >= first_pane;
+      // Moving lights: none; panes: only where asked.
+      if (g.light != kNone16 && g.light >= o.lights && !pane_set) continue;
       ProbeSetRecord set{g.kind, g.light, g.object_a, g.object_b, uint32_t(entries.size()), 0};
       for (uint32_t p = 0; p < probes.size(); ++p) {
         if (g.kind != kGroupBase && uniform(0, 1) >= o.probe_reach_probability) continue;

@@ -4,10 +4,12 @@
 // weights w_k (pack_format.h, "Moving lights").
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "bake/session.h"
 #include "indirect/integrator.h"
 #include "panes/pane_cluster.h"
+#include "worker_pool.h"
 
 namespace lightpatch::cooker {
 
@@ -37,22 +39,32 @@ void BakeSession::bake_panes(BakedMaps& maps, Progress& progress, Report& report
   const DirectPoints* pts = b.indirect->direct_points();
   const bool points = pts && pts->size() > 0;
   const float threshold = pane_significance(scene, b.output_step);
+  const int s = b.layout.align;
+  const bool blocks_divide = s > 1 && texels.width % s == 0 && texels.height % s == 0;
   progress.begin("pane bounce light", maps.panes.size());
-  for (size_t k = 0; k < maps.panes.size(); ++k) {
-    PaneMap& pane = maps.panes[k];
+  // Panes are independent solves: one per worker, so both cores stay busy through the solves'
+  // serial parts (the coarse source, the denoiser, the magnification).
+  parallel_for(int(maps.panes.size()), b.threads, [&](int k) {
+    set_worker_fp_mode();
+    PaneMap& pane = maps.panes[size_t(k)];
     FloatImage direct(texels.width, texels.height, 1);
     for (uint32_t t : pane.texels) direct.data[t] = 1.0f;
     PointLight at_points;
     if (points) {
       at_points = PointLight(pts->width, pts->height, 1);
       for (size_t p = 0; p < pts->size(); ++p)
-        if (pane_of[pts->texel[p]] == int32_t(k)) at_points.data[p] = 1.0f;
+        if (pane_of[pts->texel[p]] == k) at_points.data[p] = 1.0f;
     }
     GroupBounce g = b.indirect->prepare(direct, points ? &at_points : nullptr, threshold);
-    pane.map = FloatImage(texels.width, texels.height, 3);
-    b.indirect->add(std::move(g.indirect), pane.map, &pane.indirect);
+    FloatImage fine(texels.width, texels.height, 3);
+    b.indirect->add(std::move(g.indirect), fine, &pane.indirect);
+    // The pack stores a pane on the indirect map alone where its blocks divide the page
+    // (pack_builder.cpp): then the block image is all the cook keeps (PaneMap).
+    for (float v : fine.data)
+      if (std::isfinite(v)) pane.peak = std::max(pane.peak, v);
+    if (!(blocks_divide && !pane.indirect.data.empty())) pane.map = std::move(fine);
     progress.advance();
-  }
+  });
   const double bounce_s = progress.end();
   size_t pane_texels = 0;
   for (const PaneMap& p : maps.panes) pane_texels += p.texels.size();

@@ -8,11 +8,19 @@
 // two objects is taken to meet the first only, and a direct sample blocked by two objects is
 // taken away by each one's shadow set (the maps' pair corrections have no probe sets): the
 // probes are exact for any one object at a time.
+//
+// Moving lights: their direct light at a probe is the game's, as on surfaces, so they have no
+// direct samples. Each pane of theirs has a contribution set whose radiance along a ray that sees
+// texel t is albedo / pi * ([t in the pane] + the pane's map at t): the pane's own irradiance 1,
+// which the light map leaves to the game's direct light on the surface, is light the surface
+// reflects, indirect light for the probe's object. Panes have no object sets: their maps ignore
+// the objects too (a ray that meets an object sees the static texel behind it).
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <string>
 #include <tuple>
 
 #include "direct_light.h"
@@ -130,6 +138,7 @@ class ProbeLighter {
     out.clear();
     for (size_t li = 0; li < scene_.lights.size(); ++li) {
       const Light& light = scene_.lights[li];
+      if (light.moving) continue;  // the game's, at its pose (and no set holds it)
       if (light.type == LightType::kDirectional) {
         sample(int(li), p, -light.direction, extent_, 1.0f, out);
         continue;
@@ -215,6 +224,19 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
     shadow[size_t(s.light) * objects + size_t(s.object)] = &s.map;
   std::vector<const FloatImage*> static_shadow(objects, nullptr);
   for (const StaticShadowMap& s : maps.static_shadows) static_shadow[size_t(s.object)] = &s.map;
+  // The panes are pack lights after the semi-dynamic and the moving lights (pack_builder.cpp);
+  // each texel is a member of one pane at most (cluster_panes partitions them).
+  const size_t panes = maps.panes.size();
+  const int first_pane = int(maps.lights.size() + maps.moving_lights.size());
+  std::vector<int32_t> pane_of(texels.valid.size(), -1);
+  for (size_t k = 0; k < panes; ++k) {
+    for (uint32_t t : maps.panes[k].texels) {
+      if (t >= pane_of.size() || pane_of[t] >= 0)
+        throw CookError("pane " + std::to_string(k) + ": texel " + std::to_string(t) +
+                        " out of range or in two panes");
+      pane_of[t] = int32_t(k);
+    }
+  }
 
   std::vector<std::vector<std::pair<SetKey, Sh>>> per_probe(probes.probes.size());
   progress.begin("light probes", probes.probes.size());
@@ -280,6 +302,29 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
       for (size_t o = 0; o < objects; ++o) {
         const FloatImage* s = shadow[l * objects + o];
         if (seen[o] || s) object_rays(set(pack::kGroupShadow, int(l), int(o)), c, s, int(o), false);
+      }
+    }
+    if (panes > 0) {
+      // Pane k's set: its members' irradiance 1 and its map, both reflected. Pane by pane over
+      // the rays that see a texel, so that one map is read at a time.
+      std::vector<Sh> pane(panes);
+      for (Sh& sh : pane) sh.fill(0.0f);
+      std::vector<const ProbeRay*> seeing;
+      for (const ProbeRay& r : ray) {
+        if (r.texel == kNoTexel) continue;
+        seeing.push_back(&r);
+        if (pane_of[r.texel] >= 0) add(pane[size_t(pane_of[r.texel])], r.y, r.rho * ray_weight);
+      }
+      for (size_t k = 0; k < panes; ++k) {
+        const PaneMap& pm = maps.panes[k];
+        for (const ProbeRay* r : seeing) {
+          float b[3];
+          pane_bounce_at(pm, uint32_t(texels.width), r->texel, b);
+          const glm::vec3 v(b[0], b[1], b[2]);
+          if (v != glm::vec3(0.0f)) add(pane[k], r->y, r->rho * v * ray_weight);
+        }
+        if (std::any_of(pane[k].begin(), pane[k].end(), [](float v) { return v != 0.0f; }))
+          set(pack::kGroupContribution, first_pane + int(k), -1) = pane[k];
       }
     }
     auto& out = per_probe[size_t(pi)];

@@ -3,11 +3,13 @@
 //
 // A probe's SH is the sum over the pack's probe sets of sign * factor * entry, with the sign,
 // factor (f_l or 1) and activity of the set's owner from group_rules.h, exactly as the light map
-// sums its groups. LightProbes keeps per probe a double-precision accumulator and per set the
-// factor it last applied; update() visits every set (a few thousand comparisons at most) and,
-// where a set's factor changed, adds (new - old) * its entries. Its cost is counted in entries
-// (one entry: 27 multiply-adds into one probe): stats() gives the last update's, the total and the
-// most sets any one probe has (what a full evaluation of that probe costs).
+// sums its groups; a moving light's panes are lights like the others, so their sets follow its
+// pose through the pane factors (SceneState::light_factor, or the planner's presented ones).
+// LightProbes keeps per probe a double-precision accumulator and per set the factor it last
+// applied; update() visits every set (a few thousand comparisons at most) and, where a set's
+// factor changed, adds (new - old) * its entries. Its cost is counted in entries (one entry: 27
+// multiply-adds into one probe): stats() gives the last update's, the total and the most sets any
+// one probe has (what a full evaluation of that probe costs).
 //
 // Probes are evaluated on the CPU whatever path the GLES Runtime takes; the game samples the SH
 // where a moving thing is (sample()) and uploads it as uniforms (27 floats, or the 3 x 9 of its

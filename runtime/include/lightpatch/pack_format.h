@@ -89,7 +89,9 @@
 // light's position (PaneRecord: a hemispherical depth map from the pane's eye, filtered). The
 // pane lights' authored colour is that factor for the moving lights' authored poses and
 // states (intensity 1), so the authored state of every light is consistent. Pane lights have no
-// name, no shadow, pair-correction or probe set; moving lights have no group and no probe set.
+// name and no shadow or pair-correction group; a pane's probe set is a contribution set too (the
+// light its members at irradiance 1 and its map reflect towards the probe: at a probe even the
+// members' first bounce is indirect light). Moving lights have no group and no probe set.
 #pragma once
 
 #include <cstddef>

@@ -187,6 +187,8 @@ class Runtime {
   // two, fixed from open() to close().
   float light_map_scale() const { return scale_; }
   bool ready() const { return planner_.map_ready(); }
+  // The limits open() was given.
+  const RuntimeLimits& limits() const { return limits_; }
   // Presented, nothing pending, and every pane at its target factor (see "Moving lights").
   bool idle() const { return planner_.idle() && !panes_dirty_ && !panes_off_; }
   RecomposePath path() const { return path_; }

@@ -482,10 +482,16 @@ Status Validator::check_moving(const Header& h, const LightRecord* lights,
   if (out->probe_set_count > 0) {
     for (uint32_t i = 0; i < out->probe_set_count; ++i) {
       const ProbeSetRecord& s = out->probe_sets[i];
-      if (moving_light(s.light) || pane_light(s.light)) {
-        return fail(Status::kCorrupt, "probe set %u (%s): light %u is a %s and has no probe sets",
-                    i, group_kind_name(s.kind), s.light,
-                    pane_light(s.light) ? "pane" : "moving light");
+      if (moving_light(s.light)) {
+        return fail(Status::kCorrupt,
+                    "probe set %u (%s): light %u moves and has no probe sets (its bounce light "
+                    "is its panes')",
+                    i, group_kind_name(s.kind), s.light);
+      }
+      if (pane_light(s.light) && s.kind != kGroupContribution) {
+        return fail(Status::kCorrupt,
+                    "probe set %u (%s): pane light %u has only a contribution probe set", i,
+                    group_kind_name(s.kind), s.light);
       }
     }
   }

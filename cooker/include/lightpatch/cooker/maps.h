@@ -53,9 +53,32 @@ struct PairCorrectionMap {
 struct PaneMap {
   pack::PaneRecord record{};
   std::vector<uint32_t> texels;  // its light-map texels (row-major indices)
-  FloatImage map;                // the bounce light, 3 channels
-  FloatImage indirect;           // its block image (BakedMaps), or empty
+  // The bounce light, 3 channels: the block image where the layout has blocks that divide the
+  // page (the pack stores a pane on the indirect map alone, so the cook keeps no full-size map:
+  // 128 of them were most of the full inn's peak memory), else the light-map-sized map.
+  FloatImage map;       // light-map size, or empty when `indirect` holds the pane
+  FloatImage indirect;  // its block image (BakedMaps), or empty
+  float peak = 0.0f;    // the light-map-sized map's largest finite value (its significance)
 };
+
+// Pane `p`'s bounce light at light-map texel `t` of a `width`-texel-wide page, into out[3]: its
+// map's, else its block image's block holding t (zero without either).
+inline void pane_bounce_at(const PaneMap& p, uint32_t width, uint32_t t, float out[3]) {
+  out[0] = out[1] = out[2] = 0.0f;
+  const float* v = nullptr;
+  if (!p.map.data.empty()) {
+    v = &p.map.data[size_t(t) * 3];
+  } else if (!p.indirect.data.empty() && p.indirect.width > 0 && p.indirect.height > 0 &&
+             width >= uint32_t(p.indirect.width)) {
+    const uint32_t s = width / uint32_t(p.indirect.width);
+    uint32_t bx = (t % width) / s, by = (t / width) / s;
+    if (bx >= uint32_t(p.indirect.width)) bx = uint32_t(p.indirect.width) - 1;
+    if (by >= uint32_t(p.indirect.height)) by = uint32_t(p.indirect.height) - 1;
+    v = &p.indirect.data[(size_t(by) * size_t(p.indirect.width) + bx) * 3];
+  }
+  if (v)
+    for (int c = 0; c < 3; ++c) out[c] = v[c];
+}
 
 struct BakedMaps {
   // Irradiance of one 8-bit step of the final light map at the authored exposure (the

@@ -4,7 +4,9 @@
 // light's contribution, a light's shadow of an object, an object's static shadow), as order-2
 // irradiance SH. The maps of every group, finalized, are the radiance cache a probe gathers from:
 // a probe's value for a set is the direct light of the set's light(s) at the probe plus the light
-// its surfaces reflect towards it (albedo / pi times the set's map at the surface seen).
+// its surfaces reflect towards it (albedo / pi times the set's map at the surface seen). The
+// moving lights' panes have a contribution set each, their bounce light only: the pane's members
+// at irradiance 1 plus its map, reflected (a moving light's direct light is the game's).
 #pragma once
 
 #include <glm/glm.hpp>
@@ -53,8 +55,10 @@ struct ProbeBake {
   std::vector<uint32_t> grid_index;  // per grid point, x fastest; pack::kNone32 where none
   struct Set {
     uint16_t kind = pack::kGroupBase;  // base, contribution, shadow or static shadow
-    int light = -1;   // index into BakedMaps::lights (the pack's light index), or -1
-    int object = -1;  // Scene::objects index (the pack's object index), or -1
+    // The pack's light index, or -1: a BakedMaps::lights index, or for pane k of BakedMaps::panes
+    // lights.size() + moving_lights.size() + k (pack_builder.cpp's light table).
+    int light = -1;
+    int object = -1;                        // Scene::objects index (the pack's object index), or -1
     std::vector<pack::ProbeEntry> entries;  // sorted by probe, each probe once
   };
   std::vector<Set> sets;  // at most one per owner, any order (the pack builder sorts)
@@ -81,7 +85,11 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
 
 // Every probe's irradiance SH for one state directly, from that state's finalized map (the map
 // bake-state writes for it) and its lights, with the same rays as bake_probes: what the runtime's
-// sum of the sets for that state must give.
+// sum of the sets for that state must give. The moving lights have no direct samples here either
+// (their direct light at a probe is the game's), but their first bounce from the surfaces the
+// probe sees is in the probes: with a moving light on, `state_map` must hold its direct light on
+// the surfaces too (BakeOptions::moving_direct, `bake-state --moving-direct`), at the state's pose;
+// without it the probes miss the light the pane sets' members bring.
 std::vector<std::array<float, pack::kProbeShCount * 3>> bake_state_probes(
     const ProbeBake& probes, const Scene& scene, const Layout& layout, const TexelSet& texels,
     const Tracer& tracer, const FloatImage& state_map, const StateSpec& state,
