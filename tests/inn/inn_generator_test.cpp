@@ -1,4 +1,5 @@
 // The inn generator: determinism, counts, names, semi-dynamic markings, sidecars, validation.
+#include <cmath>
 #include <map>
 #include <set>
 #include <string>
@@ -23,6 +24,7 @@ struct Summary {
   std::set<std::string> object_nodes;
   bool names_unique = true;
   bool every_semi_light_has_radius = true;
+  std::set<std::string> moving_lights;  // extras.moving (semi-dynamic too)
 };
 
 // Counts from the written file itself (not from the generator's own statistics).
@@ -42,6 +44,7 @@ Summary summarize(const json& j) {
     const bool semi = n.contains("extras") && n["extras"].value("semiDynamic", false);
     if (n.contains("extensions") && n["extensions"].contains("KHR_lights_punctual")) {
       s.light_nodes.insert(name);
+      if (n.contains("extras") && n["extras"].value("moving", false)) s.moving_lights.insert(name);
       if (semi) {
         ++s.semi_lights;
         s.every_semi_light_has_radius =
@@ -88,7 +91,12 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris,
   EXPECT_EQ(s.triangles, inn.stats.triangles);
   EXPECT_GE(s.triangles, min_tris);
   EXPECT_LE(s.triangles, max_tris);
-  EXPECT_EQ(s.semi_lights, inn.stats.semi_dynamic_lights);
+  EXPECT_EQ(s.semi_lights, inn.stats.semi_dynamic_lights + inn.stats.moving_lights);
+  // The lantern: the one moving light, lit on its hook.
+  EXPECT_EQ(inn.stats.moving_lights, 1u);
+  EXPECT_EQ(s.moving_lights, std::set<std::string>{"lantern"});
+  EXPECT_EQ(inn.scenario["lantern"], "lantern");
+  EXPECT_FALSE(inn.state["lights"].contains("lantern"));
   EXPECT_GE(s.semi_lights, min_semi_lights);
   EXPECT_TRUE(s.every_semi_light_has_radius);
   EXPECT_EQ(s.static_lights, inn.stats.static_lights);
@@ -122,8 +130,26 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris,
   // another room); ends with the spell.
   const json& steps = inn.scenario["steps"];
   ASSERT_GE(steps.size(), 3u);
-  std::size_t lit = 0, placed = 0, close_ups = 0;
+  std::size_t lit = 0, placed = 0, close_ups = 0, carried = 0, moves = 0;
+  json last_pose;
   for (const auto& step : steps) {
+    // The lantern walk: taken, then moved in steps of at most 2.5 m (positions in the state).
+    carried += step["action"] == "carry" ? 1u : 0u;
+    if (step["action"] == "move") {
+      ++moves;
+      EXPECT_EQ(carried, 1u);
+      const json& pose = step["state"]["lights"]["lantern"]["position"];
+      ASSERT_EQ(pose.size(), 3u);
+      if (!last_pose.is_null()) {
+        double d2 = 0;
+        for (size_t a = 0; a < 3; ++a) {
+          const double d = pose[a].get<double>() - last_pose[a].get<double>();
+          d2 += d * d;
+        }
+        EXPECT_LE(std::sqrt(d2), 2.5);
+      }
+      last_pose = pose;
+    }
     if (step.contains("node")) {
       EXPECT_TRUE(s.names.count(step["node"].get<std::string>())) << step.dump();
     }
@@ -139,6 +165,8 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris,
   EXPECT_EQ(lit, off);
   EXPECT_EQ(close_ups, 4u);
   EXPECT_EQ(placed, inn.stats.items);
+  EXPECT_EQ(carried, 1u);
+  EXPECT_EQ(moves, 5u);
   EXPECT_EQ(steps.front()["action"], "start");
   EXPECT_EQ(steps.back()["action"], "spell_done");
 }

@@ -4,9 +4,12 @@
 // planner's per-frame counters in frames.csv), frames kept to the budget rule, lighting a light
 // brightened the light map around it (snuffing darkened it), and the carried item, lit by the
 // light probes, darkened when the candle beside it was snuffed and hardly changed for a candle in
-// the other room.
+// the other room. The lantern (a moving light) is taken and carried through the door: every move
+// lands within its bound, and its bounce light as the pack recomposes it at two poses agrees with
+// bake-state of the same states.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -62,6 +65,60 @@ double num(const Row& r, const char* key) {
   return std::stod(r.at(key));
 }
 
+// A PFM image's values (3 channels), in file order (both images compared come from one writer).
+std::vector<float> read_pfm(const std::filesystem::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::string magic;
+  int w = 0, h = 0;
+  double scale = 0;
+  f >> magic >> w >> h >> scale;
+  f.get();
+  std::vector<float> v(f && magic == "PF" && w > 0 && h > 0 ? size_t(w) * size_t(h) * 3 : 0);
+  f.read(reinterpret_cast<char*>(v.data()), std::streamsize(v.size() * sizeof(float)));
+  if (!f) v.clear();
+  return v;
+}
+
+struct BounceError {
+  double relative_rmse = 0, bias = 0, median_ratio = 0;
+  size_t texels = 0;
+};
+
+// (rec_on - rec_off) against (bake_on - bake_off), per texel mean of the channels, over the texels
+// whose bake-state bounce light is at least 1 % of its 99th percentile.
+BounceError bounce_error(const std::vector<float>& rec_on, const std::vector<float>& rec_off,
+                         const std::vector<float>& bake_on, const std::vector<float>& bake_off) {
+  const size_t n = rec_on.size() / 3;
+  std::vector<double> r(n), b(n);
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      r[i] += (rec_on[i * 3 + c] - rec_off[i * 3 + c]) / 3.0;
+      b[i] += (bake_on[i * 3 + c] - bake_off[i * 3 + c]) / 3.0;
+    }
+  }
+  std::vector<double> sorted = b;
+  std::sort(sorted.begin(), sorted.end());
+  const double floor = 0.01 * sorted[size_t(0.99 * double(n - 1))];
+  double se = 0, sb2 = 0, sr = 0, sb = 0;
+  std::vector<double> ratio;
+  BounceError e;
+  for (size_t i = 0; i < n; ++i) {
+    if (!(b[i] > floor)) continue;
+    ++e.texels;
+    se += (r[i] - b[i]) * (r[i] - b[i]);
+    sb2 += b[i] * b[i];
+    sr += r[i];
+    sb += b[i];
+    ratio.push_back(r[i] / b[i]);
+  }
+  if (e.texels == 0) return e;
+  e.relative_rmse = std::sqrt(se / sb2);
+  e.bias = (sr - sb) / sb;
+  std::nth_element(ratio.begin(), ratio.begin() + ptrdiff_t(ratio.size() / 2), ratio.end());
+  e.median_ratio = ratio[ratio.size() / 2];
+  return e;
+}
+
 TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
   const std::filesystem::path dir = test::scratch_dir();
   const std::string inn = LIGHTPATCH_INN_BIN, tool = LIGHTPATCH_TOOL_BIN;
@@ -98,6 +155,7 @@ TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
 
   std::set<std::string> lit;
   std::map<std::string, int> held_checks;
+  std::vector<std::string> moves;  // the lantern walk's state files
   for (size_t i = 0; i < steps.size(); ++i) {
     const Row& s = steps[i];
     SCOPED_TRACE("step " + s.at("step"));
@@ -109,7 +167,15 @@ TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
       EXPECT_EQ(s.at("step"), scenario["steps"][i - 1]["name"].get<std::string>());
       EXPECT_TRUE(std::filesystem::exists(out / s.at("screenshot")));
     }
-    if (s.at("action") == "start") continue;
+    if (s.at("action") == "start" || s.at("action") == "carry") continue;
+    if (s.at("action") == "move") {
+      // The lantern's panes follow over several frames (runtime.h, "Moving lights"); nothing else
+      // changes during the walk, so nothing is pending once it landed.
+      EXPECT_EQ(u64(frames[u64(s, "landed_frame") - 1], "pending_changes"), 0u);
+      EXPECT_TRUE(std::filesystem::exists(out / s.at("state")));
+      moves.push_back(s.at("state"));
+      continue;
+    }
     // The run's latency agrees with the planner's counters frame by frame: pending from the frame
     // the change was made until it landed, and landed with the same latency.
     const uint64_t applied = u64(s, "applied_frame"), landed = u64(s, "landed_frame");
@@ -163,6 +229,52 @@ TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
   EXPECT_EQ(held_checks["near_light_off"], 1);
   EXPECT_EQ(held_checks["near_light_on"], 1);
   EXPECT_EQ(held_checks["other_room_light"], 2);
+
+  // The lantern walk, at its first pose (in the dining room) and its third (in the doorway): the
+  // lantern's bounce light as the pack recomposes it (lantern on less lantern off) against
+  // bake-state of the same two states (the cook's draft preset). Measured: 41.8 % relative RMSE,
+  // bias -22.6 %, median ratio 1.03 (dining room); 41.1 %, -2.4 %, 0.98 (doorway): issue 16's
+  // 10 % is not met (docs/moving_lights.md). A pack whose panes stayed at the lantern's hook is off
+  // by more than 100 %.
+  ASSERT_EQ(moves.size(), 5u);
+  for (const size_t k : {size_t(0), size_t(2)}) {
+    SCOPED_TRACE(moves[k]);
+    const std::filesystem::path on = out / moves[k], off = dir / ("off_" + moves[k]);
+    nlohmann::json state = nlohmann::json::parse(test::slurp(on));
+    state["lights"]["lantern"]["on"] = false;
+    std::ofstream(off) << state.dump();
+    std::vector<float> maps[4];
+    int i = 0;
+    for (const std::filesystem::path& st : {on, off}) {
+      const std::filesystem::path rec = dir / "rec.pfm", bake = dir / "bake.pfm";
+      ASSERT_EQ(run("\"" + tool + "\" recompose \"" + pack.string() + "\" --state \"" +
+                        st.string() + "\" -o \"" + rec.string() + "\"",
+                    dir / "recompose.log"),
+                0)
+          << test::slurp(dir / "recompose.log");
+      ASSERT_EQ(
+          run("\"" + tool + "\" bake-state \"" + scene.string() + "\" --quality draft --state \"" +
+                  st.string() + "\" -o \"" + bake.string() + "\" --quiet",
+              dir / "bake.log"),
+          0)
+          << test::slurp(dir / "bake.log");
+      maps[i] = read_pfm(rec);
+      maps[i + 2] = read_pfm(bake);
+      ++i;
+    }
+    for (const auto& m : maps) ASSERT_EQ(m.size(), maps[0].size());
+    ASSERT_FALSE(maps[0].empty());
+    const BounceError e = bounce_error(maps[0], maps[1], maps[2], maps[3]);
+    EXPECT_GT(e.texels, maps[0].size() / 3 / 4);  // the bounce light reaches much of the inn
+    EXPECT_LT(e.relative_rmse, 0.55);
+    EXPECT_LT(std::fabs(e.bias), 0.35);
+    EXPECT_GT(e.median_ratio, 0.75);
+    EXPECT_LT(e.median_ratio, 1.35);
+    std::printf(
+        "%s: lantern bounce light against bake-state: %.1f %% relative RMSE, bias %+.1f %%, "
+        "median ratio %.3f over %zu texels\n",
+        moves[k].c_str(), 100.0 * e.relative_rmse, 100.0 * e.bias, e.median_ratio, e.texels);
+  }
 }
 
 }  // namespace

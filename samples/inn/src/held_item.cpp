@@ -13,6 +13,11 @@ glm::vec3 hand_position(const glm::mat4& view) {
   return glm::vec3(glm::inverse(view) * in_view);
 }
 
+glm::vec3 lantern_hand_position(const glm::mat4& view) {
+  const glm::vec4 in_view(-0.25f, -0.12f, -0.5f, 1.0f);
+  return glm::vec3(glm::inverse(view) * in_view);
+}
+
 HeldItem hold_item(const InnGame& game, const World& world, const LightProbes& probes,
                    const glm::mat4& view) {
   HeldItem held;

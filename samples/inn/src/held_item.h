@@ -25,6 +25,8 @@ struct HeldItem {
 // Where the hand holds an item for a camera with this view matrix (world to view): 0.45 m ahead,
 // 0.14 m right and 0.16 m down in view space.
 glm::vec3 hand_position(const glm::mat4& view);
+// Where the other hand holds the lantern: 0.5 m ahead, 0.25 m left and 0.12 m down.
+glm::vec3 lantern_hand_position(const glm::mat4& view);
 
 // The first carried item of `game` at the hand of a camera with this view, with the probes' SH
 // there. object -1 when nothing is carried or the pack has no probes there. Allocates nothing.

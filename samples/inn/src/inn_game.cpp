@@ -57,6 +57,11 @@ InnGame::InnGame(Runtime& runtime, const World& world, const nlohmann::json& sce
     items_.push_back(it);
     item_rooms_.emplace_back();
   }
+  if (scenario.contains("lantern")) {
+    lantern_ = static_cast<int32_t>(light_index(rt_, scenario["lantern"].get<std::string>()));
+    const LightPose pose = rt_.light_pose(static_cast<uint32_t>(lantern_));
+    lantern_position_ = {pose.position[0], pose.position[1], pose.position[2]};
+  }
   const int32_t book = rt_.find_object("spell_book");
   book_ = book;
   for (const auto& step : scenario.at("steps")) {
@@ -142,6 +147,35 @@ bool InnGame::place(uint32_t item) {
   return true;
 }
 
+bool InnGame::take_lantern() {
+  if (lantern_ < 0 || lantern_carried_) return false;
+  lantern_carried_ = true;
+  return true;
+}
+
+bool InnGame::move_lantern(glm::vec3 position) {
+  if (!lantern_carried_) return false;
+  LightPose pose = rt_.light_pose(static_cast<uint32_t>(lantern_));
+  for (int a = 0; a < 3; ++a) pose.position[a] = position[a];
+  if (rt_.set_light_pose(static_cast<uint32_t>(lantern_), pose) != Status::kOk) return false;
+  lantern_position_ = position;
+  return true;
+}
+
+glm::vec3 InnGame::lantern_factor() const {
+  if (lantern_ < 0) return glm::vec3(0.0f);
+  const LightState& s = lights_[static_cast<uint32_t>(lantern_)];
+  if (!s.on) return glm::vec3(0.0f);
+  return glm::vec3(s.color[0], s.color[1], s.color[2]) * s.intensity;
+}
+
+bool InnGame::lantern_landed() const {
+  if (lantern_ < 0 || !rt_.ready() || rt_.stats().pane_pending != 0) return false;
+  for (uint32_t l = 0; l < rt_.light_count(); ++l)
+    if (rt_.state().light_is_pane(l) && !light_landed(l)) return false;
+  return true;
+}
+
 void InnGame::complete_spell() {
   spell_done_ = true;
   if (spell_light_ < 0) return;
@@ -178,6 +212,9 @@ InnGame::Target InnGame::target(glm::vec3 eye, glm::vec3 forward) const {
     consider(Target::kLight, l, world_.lights[l].position, kReach,
              (lights_[l].on ? "snuff the " : "light the ") + pretty(world_.lights[l].name));
   }
+  if (lantern_ >= 0 && !lantern_carried_)
+    consider(Target::kLantern, static_cast<uint32_t>(lantern_), lantern_position_, kReach,
+             "take the lantern");
   if (book_ >= 0 && !book_taken_) {
     consider(Target::kTake, static_cast<uint32_t>(book_),
              world_.objects[static_cast<size_t>(book_)].center, kReach, "take the spell book");
@@ -221,6 +258,9 @@ std::string InnGame::interact(glm::vec3 eye, glm::vec3 forward) {
       }
       return line;
     }
+    case Target::kLantern:
+      take_lantern();
+      return "You take the lantern.";
     case Target::kNone:
       break;
   }
@@ -229,6 +269,8 @@ std::string InnGame::interact(glm::vec3 eye, glm::vec3 forward) {
 
 std::string InnGame::objective() const {
   if (spell_done_) return "The spell is cast: the hearth burns violet. (Esc quits)";
+  // Until it is carried, the lantern is the first thing to find.
+  if (lantern_ >= 0 && !lantern_carried_) return "Take the lantern from its hook (E).";
   if (book_ >= 0 && !book_taken_) {
     return "Find the spell book" +
            (book_room_.empty() ? std::string() : " (" + pretty(book_room_) + ")") +

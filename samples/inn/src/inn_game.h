@@ -39,9 +39,26 @@ class InnGame {
   bool place(uint32_t item);   // a carried ingredient (index into items())
   void complete_spell();
 
+  // The lantern (the scenario's "lantern": a light the pack flags moving). The player takes it
+  // from its hook; carried, the game moves it (move_lantern(), once a frame before
+  // Runtime::update()): the runtime's panes bring its bounce light, the renderer draws its direct
+  // light (SceneRenderer::Frame::lantern_*). lantern() is -1 when the pack has none.
+  int32_t lantern() const { return lantern_; }
+  bool lantern_carried() const { return lantern_carried_; }
+  bool take_lantern();
+  // Moves the carried lantern to `position` (world space, metres); false when it is not carried
+  // or the runtime refuses the pose.
+  bool move_lantern(glm::vec3 position);
+  glm::vec3 lantern_position() const { return lantern_position_; }
+  // Its direct light's factor (colour * intensity, 0 when out): what the light map would hold for
+  // it per unit of its baked (intensity 1) light.
+  glm::vec3 lantern_factor() const;
+  // Every pane the lantern drives shows its target (the runtime has recomposed the last move).
+  bool lantern_landed() const;
+
   // What the interaction key would do for a player at `eye` looking along `forward`.
   struct Target {
-    enum Kind { kNone, kLight, kTake, kPlace } kind = kNone;
+    enum Kind { kNone, kLight, kTake, kPlace, kLantern } kind = kNone;
     uint32_t index = 0;  // light, object, or item index
     std::string label;   // e.g. "light candle_dining_0"
   };
@@ -94,6 +111,9 @@ class InnGame {
   int32_t spell_light_ = -1;
   LightState spell_state_{true, {0.7f, 0.3f, 1.0f}, 60.0f};
   bool spell_done_ = false;
+  int32_t lantern_ = -1;
+  bool lantern_carried_ = false;
+  glm::vec3 lantern_position_{0.0f};
   std::string book_room_, altar_room_;
   std::vector<std::string> item_rooms_;
   uint32_t flicker_cursor_ = 0;

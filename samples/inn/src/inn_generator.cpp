@@ -26,6 +26,7 @@ namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
 constexpr float kExteriorThickness = 0.3f;
+constexpr const char* kLantern = "lantern";  // the moving light's node
 
 // Walls of a room, by the axis they are perpendicular to and their side.
 enum class Wall { kNegX, kPosX, kNegZ, kPosZ };
@@ -149,6 +150,11 @@ class InnBuilder {
               bool on);
   void torch(const std::string& name, const std::string& room, glm::vec3 pos_on_wall,
              glm::vec3 facing, bool on);
+  // The lantern the player carries (extras.moving: its bounce light comes from the panes, its
+  // direct light is the game's), lit on its hook at `hook`; `walk`: the scripted walk with it.
+  void lantern(const std::string& room, glm::vec3 hook, std::vector<glm::vec3> walk);
+  // The scripted steps: take the lantern, then carry it along the walk (one step a pose).
+  void lantern_walk();
   // Objects.
   void object(const std::string& name, const std::string& room, const Parts& parts, glm::vec3 pos,
               float yaw);
@@ -174,6 +180,7 @@ class InnBuilder {
   Json steps_ = Json::array();
   std::map<std::string, std::pair<std::string, glm::vec3>> where_;  // node → (room, position)
   std::vector<std::string> semi_lights_;
+  std::vector<glm::vec3> lantern_walk_;  // empty: the layout has no lantern
   std::vector<std::string> items_;
   std::vector<std::string> placed_;
   glm::vec3 altar_{0.0f};  // where the placed items go, in front of the main fireplace
@@ -445,6 +452,41 @@ void InnBuilder::torch(const std::string& name, const std::string& room_name, gl
              on, 12.0f);
 }
 
+void InnBuilder::lantern(const std::string& room_name, glm::vec3 hook,
+                         std::vector<glm::vec3> walk) {
+  if (!options_.lantern) return;
+  Light l;
+  l.type = LightType::kPoint;
+  l.color = {1.0f, 0.78f, 0.5f};
+  l.intensity = 3.0f;
+  l.range = 10.0f;
+  const int node = scene_.add_light_node(kLantern, l, hook, {0, -1, 0}, true, 0.03f);
+  scene_.node(node).moving = true;
+  where_[kLantern] = {room_name, hook};
+  lantern_walk_ = std::move(walk);
+  ++stats_.moving_lights;
+}
+
+void InnBuilder::lantern_walk() {
+  if (lantern_walk_.empty()) return;
+  scenario_step("take_lantern", "carry", kLantern, Json::object());
+  for (size_t i = 0; i < lantern_walk_.size(); ++i) {
+    const glm::vec3 p = lantern_walk_[i];
+    scenario_step("lantern_walk_" + std::to_string(i), "move", kLantern,
+                  Json{{"lights", {{kLantern, {{"position", {p.x, p.y, p.z}}}}}}});
+    // Look at the lantern from behind and above, along the walk.
+    Json& st = steps_.back();
+    const glm::vec3 from = i > 0 ? lantern_walk_[i - 1] : where_.at(kLantern).second;
+    glm::vec3 back = from - p;
+    back.y = 0.0f;
+    back = glm::length(back) > 1e-3f ? glm::normalize(back) : glm::vec3(-1, 0, 0);
+    const glm::vec3 cam = p + back * 1.2f + glm::vec3(0.0f, 0.45f, 0.0f);
+    st["camera"] = {cam.x, cam.y, cam.z};
+    st["focus"] = {p.x, p.y - 0.3f, p.z};
+    st["close_up"] = true;
+  }
+}
+
 void InnBuilder::object(const std::string& name, const std::string& room_name, const Parts& parts,
                         glm::vec3 pos, float yaw) {
   Parts local;
@@ -610,6 +652,12 @@ void InnBuilder::small_layout() {
   object("spell_book", "dining", make_spell_book(detail_), glm::vec3(sm * glm::vec4(slot, 1)), kPi);
   item(0, "dining", {3.5f, 0.76f, 2.5f}, kPi / 2);
   item(1, "living_main", {7.0f, 0.0f, 4.5f}, 0.0f);
+  lantern("dining", {5.6f, 1.8f, 1.0f},
+          {{4.6f, 1.3f, 1.6f},
+           {5.3f, 1.3f, 3.6f},
+           {6.1f, 1.3f, 3.8f},
+           {7.3f, 1.3f, 3.4f},
+           {8.6f, 1.3f, 2.5f}});
 }
 
 void InnBuilder::full_layout() {
@@ -782,6 +830,12 @@ void InnBuilder::full_layout() {
   item(3, "cellar", {3.0f, -2.2f, 3.0f}, 0.0f);
   item(4, "bath", {20.2f, 0.46f, 11.0f}, 0.0f);
   item(5, "living_small", {13.85f, 0.6f, 11.35f}, 0.4f);
+  lantern("dining", {9.6f, 1.8f, 3.0f},
+          {{8.4f, 1.3f, 4.4f},
+           {9.4f, 1.3f, 6.4f},
+           {10.1f, 1.3f, 6.6f},
+           {11.6f, 1.3f, 6.0f},
+           {13.4f, 1.3f, 4.6f}});
 }
 
 Inn InnBuilder::build() {
@@ -817,6 +871,7 @@ Inn InnBuilder::build() {
   // The scripted scenario: light the lights one by one, take the book, collect and place the
   // items, the spell completes (the main fire flares up violet).
   scenario_step("dark_inn", "start", "", Json::object());
+  lantern_walk();
   for (const std::string& l : semi_lights_) {
     if (state_lights_.contains(l))
       scenario_step("light_" + l, "light", l, Json{{"lights", {{l, {{"on", true}}}}}});
@@ -841,6 +896,7 @@ Inn InnBuilder::build() {
   inn.scenario["scale"] = options_.scale == InnScale::kSmall ? "small" : "full";
   inn.scenario["seed"] = options_.seed;
   inn.scenario["semi_dynamic_lights"] = semi_lights_;
+  if (!lantern_walk_.empty()) inn.scenario["lantern"] = kLantern;
   inn.scenario["items"] = items_;
   inn.scenario["placed_items"] = placed_;
   inn.scenario["steps"] = steps_;

@@ -7,11 +7,14 @@
 //
 // Outputs of generate_inn():
 // - the scene (SceneBuilder): static room meshes, semi-dynamic lights (extras.semiDynamic,
-//   extras.lightRadius) and semi-dynamic objects (the spell book, the ingredients and tools, and
-//   their `placed_<item>` copies in front of the main fireplace);
+//   extras.lightRadius), a lantern the player carries (a moving light: extras.moving, lit on its
+//   hook in the dining room) and semi-dynamic objects (the spell book, the ingredients and tools,
+//   and their `placed_<item>` copies in front of the main fireplace);
 // - `state`: the initial scene state in DESIGN.md's format (lights that start off, placed items
 //   hidden);
-// - `scenario`: the scripted steps for the game (see write_inn()).
+// - `scenario`: the scripted steps for the game (see write_inn()): after the dark start, the
+//   player takes the lantern ("carry") and walks it through the door to the altar ("move" steps
+//   whose state gives the lantern's position), then lights the lights, takes the book, ....
 #pragma once
 
 #include <cstddef>
@@ -33,12 +36,14 @@ enum class InnScale {
 struct InnOptions {
   InnScale scale = InnScale::kFull;
   std::uint32_t seed = 1;  // varies colours, clutter and book sizes, not the layout
+  bool lantern = true;     // the carried lantern (a moving light) and its walk in the scenario
 };
 
 struct InnStats {
   std::size_t triangles = 0;
   std::size_t semi_dynamic_lights = 0;
   std::size_t static_lights = 0;
+  std::size_t moving_lights = 0;  // the lantern (extras.moving)
   std::size_t semi_dynamic_objects = 0;
   std::size_t items = 0;  // ingredients and tools (each also has a placed_ copy)
 };

@@ -120,6 +120,8 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
       }
     }
 
+    // The carried lantern follows the hand; the runtime moves its bounce light (panes).
+    if (game.lantern_carried()) game.move_lantern(lantern_hand_position(player.view()));
     game.animate(time_s, s.budget);
     const uint64_t r0 = platform::monotonic_ns();
     const Status status = rt.update(s.budget);
@@ -153,6 +155,12 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     f.held_object = held.object;
     f.held_model = held.model;
     f.held_sh = held.sh;
+    if (game.lantern() >= 0) {
+      f.lantern_position = game.lantern_position();
+      // In the light map texture's units, as the maps it is added to.
+      f.lantern_factor = game.lantern_factor() / rt.light_map_scale();
+      f.lantern_range = s.world.lights[static_cast<size_t>(game.lantern())].range;
+    }
     s.renderer.draw(f);
 
     const FrameStats& st = rt.stats();

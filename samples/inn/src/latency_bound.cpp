@@ -47,4 +47,12 @@ uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint
   return bound;
 }
 
+uint32_t moving_light_bound(const Runtime& runtime, const PackView& pack, uint64_t budget) {
+  const uint32_t per_update = std::max(1u, runtime.limits().max_pane_changes);
+  const uint32_t pushes = (pack.pane_count() + per_update - 1) / per_update;
+  uint64_t all = uint64_t(pack.lightmap_width()) * pack.lightmap_height();
+  for (uint32_t g = 0; g < pack.group_count(); ++g) all += group_area(pack, g);
+  return pushes + 2 * rebuild_frames_bound(pack, all, budget) + 1;
+}
+
 }  // namespace lightpatch::inn

@@ -29,4 +29,9 @@ uint32_t rebuild_frames_bound(const PackView& pack, uint64_t texels, uint64_t bu
 uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint64_t budget,
                               int32_t light, int32_t object, bool dims);
 
+// Bound for a move of a moving light made now (runtime.h, "Moving lights"): its pane pushes take
+// at most ceil(panes / max_pane_changes) updates; the last one then waits as a change that dims
+// does (a running rebuild, then at most one full rebuild, plus the frame that applies it).
+uint32_t moving_light_bound(const Runtime& runtime, const PackView& pack, uint64_t budget);
+
 }  // namespace lightpatch::inn

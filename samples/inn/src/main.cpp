@@ -1,5 +1,5 @@
 // lightpatch-inn: generates the inn scene and plays it.
-//   lightpatch-inn generate -o inn.glb [--draco] [--scale full|small] [--seed N]
+//   lightpatch-inn generate -o inn.glb [--draco] [--scale full|small] [--seed N] [--no-lantern]
 //   lightpatch-inn play [--scene inn.glb --pack inn.lpk] [--headless --script default --out DIR]
 //   (play_command.h has the options)
 #include <cstdio>
@@ -17,7 +17,7 @@ namespace {
 void print_usage(std::FILE* out) {
   std::fprintf(out,
                "usage: lightpatch-inn generate -o OUT.glb|OUT.gltf [--draco] [--scale full|small] "
-               "[--seed N]\n"
+               "[--seed N] [--no-lantern]\n"
                "       lightpatch-inn play [--scene inn.glb --pack inn.lpk] [--headless --script "
                "default --out DIR]\n"
                "       lightpatch-inn VERB --help\n");
@@ -31,7 +31,7 @@ int usage() {
 void print_generate_help() {
   std::printf(
       "usage: lightpatch-inn generate -o OUT.glb|OUT.gltf [--draco] [--scale full|small] "
-      "[--seed N]\n"
+      "[--seed N] [--no-lantern]\n"
       "  Writes the inn scene (glTF 2.0; .glb binary, or .gltf with a .bin beside it) and, beside\n"
       "  it, OUT.state.json (the initial scene state, DESIGN.md's format) and\n"
       "  OUT.scenario.json (the scripted scenario `play --headless` runs).\n"
@@ -43,6 +43,8 @@ void print_generate_help() {
       "                     for fast tests (default: full)\n"
       "  --seed N           varies colours, clutter and book sizes, not the layout; an integer\n"
       "                     in [0, 2^32); the same seed gives the same bytes (default: 1)\n"
+      "  --no-lantern       leave out the lantern the player carries (a moving light: its panes\n"
+      "                     take most of the pack's atlas bytes and the cook's time; README)\n"
       "  -h, --help         this text\n");
 }
 
@@ -75,6 +77,8 @@ int main(int argc, char** argv) {
       out = value();
     } else if (a == "--draco") {
       draco = true;
+    } else if (a == "--no-lantern") {
+      options.lantern = false;
     } else if (a == "--scale") {
       const std::string s = value();
       if (s == "full")

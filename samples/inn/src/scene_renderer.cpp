@@ -24,8 +24,10 @@ in float a_flame;
 out vec2 v_lightmap_uv;
 out vec3 v_albedo;
 out vec3 v_emission;
+out vec3 v_position;
 void main() {
   gl_Position = u_view_projection * vec4(a_position, 1.0);
+  v_position = a_position;
   v_lightmap_uv = a_lightmap_uv;
   v_albedo = a_albedo.rgb;
   float glow = 1.0;
@@ -54,15 +56,62 @@ void write_color(vec3 radiance) {
 const char* const kFragmentShader = R"(
 uniform sampler2D u_light_map;
 uniform sampler2D u_indirect_map;
+// The lantern's direct light (SceneRenderer::Frame): the cooker's punctual irradiance
+// (direct_light.cpp: cos / d^2 times the glTF range window), shadowed by its depth cube map.
+uniform vec3 u_lantern_position;
+uniform vec3 u_lantern_factor;  // 0: no lantern
+uniform vec3 u_lantern_planes;  // near, far, range
+uniform highp samplerCubeShadow u_lantern_shadow;
 in vec2 v_lightmap_uv;
 in vec3 v_albedo;
 in vec3 v_emission;
+in vec3 v_position;
+vec3 lantern_irradiance() {
+  vec3 to = u_lantern_position - v_position;
+  float d2 = dot(to, to);
+  float d = sqrt(d2);
+  // The triangle's own normal, facing the camera (the world's vertices carry none).
+  vec3 n = normalize(cross(dFdx(v_position), dFdy(v_position)));
+  float c = dot(n, to) / max(d, 1e-4);
+  float x = d / u_lantern_planes.z;
+  float window = clamp(1.0 - x * x * x * x, 0.0, 1.0);
+  if (c <= 0.0 || window <= 0.0) return vec3(0.0);
+  // The fragment's depth in the cube face it falls on, pulled towards the lantern by a bias that
+  // grows with the distance (the depth texels' footprint).
+  vec3 v = -to;
+  float m = max(abs(v.x), max(abs(v.y), abs(v.z)));
+  m = max(m - (0.02 + 0.015 * m), u_lantern_planes.x);
+  float nr = u_lantern_planes.x, fr = u_lantern_planes.y;
+  float z = (fr + nr) / (fr - nr) - 2.0 * fr * nr / ((fr - nr) * m);
+  float lit = texture(u_lantern_shadow, vec4(v, 0.5 * z + 0.5));
+  return u_lantern_factor * (c / (d2 + 1e-4) * window * lit);
+}
 void main() {
   // L + I (pack_format.h, "Two target maps"): the indirect map's own bilinear filtering magnifies
   // it; without one it is a black texel.
   vec3 irradiance = max(texture(u_light_map, v_lightmap_uv).rgb +
                         texture(u_indirect_map, v_lightmap_uv).rgb, vec3(0.0));
+  if (u_lantern_factor != vec3(0.0)) irradiance += lantern_irradiance();
   write_color(v_albedo * irradiance * 0.31830988 + v_emission);
+}
+)";
+
+// The lantern's flame: a round sprite at its position, hidden by what is in front of it.
+const char* const kGlowVertexShader = R"(#version 300 es
+uniform mat4 u_view_projection;
+uniform vec3 u_lantern_position;
+void main() {
+  gl_Position = u_view_projection * vec4(u_lantern_position, 1.0);
+  gl_PointSize = clamp(24.0 / max(gl_Position.w, 0.05), 2.0, 48.0);
+}
+)";
+
+const char* const kGlowFragmentShader = R"(
+void main() {
+  vec2 c = gl_PointCoord * 2.0 - 1.0;
+  float r2 = dot(c, c);
+  if (r2 > 1.0) discard;
+  write_color(vec3(8.0, 5.5, 3.0) * (1.0 - r2));
 }
 )";
 
@@ -104,6 +153,7 @@ void main() {
 SceneRenderer::~SceneRenderer() {
   if (program_) glDeleteProgram(program_);
   if (held_program_) glDeleteProgram(held_program_);
+  if (glow_program_) glDeleteProgram(glow_program_);
   if (vao_) glDeleteVertexArrays(1, &vao_);
   if (vbo_) glDeleteBuffers(1, &vbo_);
   if (ibo_) glDeleteBuffers(1, &ibo_);
@@ -112,10 +162,15 @@ SceneRenderer::~SceneRenderer() {
 
 bool SceneRenderer::init(const World& world, char* message, unsigned message_size) {
   world_ = &world;
-  if (world.lights.size() > kMaxLights) {
+  // Flames belong to the scene's lights; the moving lights' panes come after them in the pack's
+  // light table and have none.
+  flame_lights_ = 0;
+  for (size_t l = 0; l < world.lights.size(); ++l)
+    if (!world.lights[l].name.empty()) flame_lights_ = l + 1;
+  if (flame_lights_ > kMaxLights) {
     std::snprintf(message, message_size,
                   "the scene has %zu semi-dynamic lights; the renderer draws flames of at most %u",
-                  world.lights.size(), kMaxLights);
+                  flame_lights_, kMaxLights);
     return false;
   }
   const char* const attributes[] = {"a_position", "a_lightmap_uv", "a_albedo",
@@ -136,6 +191,18 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   glBindTexture(GL_TEXTURE_2D, 0);
   exposure_location_ = glGetUniformLocation(program_, "u_exposure");
   flames_location_ = glGetUniformLocation(program_, "u_flames");
+  lantern_position_location_ = glGetUniformLocation(program_, "u_lantern_position");
+  lantern_factor_location_ = glGetUniformLocation(program_, "u_lantern_factor");
+  lantern_planes_location_ = glGetUniformLocation(program_, "u_lantern_planes");
+  lantern_shadow_location_ = glGetUniformLocation(program_, "u_lantern_shadow");
+  glow_program_ =
+      build_program(kGlowVertexShader, (std::string(kFragmentOutput) + kGlowFragmentShader).c_str(),
+                    attributes, message, message_size);
+  if (!glow_program_) return false;
+  glow_view_projection_location_ = glGetUniformLocation(glow_program_, "u_view_projection");
+  glow_position_location_ = glGetUniformLocation(glow_program_, "u_lantern_position");
+  glow_exposure_location_ = glGetUniformLocation(glow_program_, "u_exposure");
+  if (!shadow_.init(world, message, message_size)) return false;
   held_program_ =
       build_program(kHeldVertexShader, (std::string(kFragmentOutput) + kHeldFragmentShader).c_str(),
                     attributes, message, message_size);
@@ -180,6 +247,12 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
 }
 
 void SceneRenderer::draw(const Frame& frame) {
+  const bool lantern = frame.lantern_factor != glm::vec3(0.0f);
+  // The shadow reaches as far as the light, or across the whole world for an unlimited one.
+  const float far = frame.lantern_range > 0.0f
+                        ? frame.lantern_range
+                        : glm::length(world_->bounds_max - world_->bounds_min) + 1.0f;
+  if (lantern) shadow_.update(vao_, frame.lantern_position, far, frame.object_visible);
   glViewport(0, 0, frame.viewport_width, frame.viewport_height);
   glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
   glClearDepthf(1.0f);
@@ -199,7 +272,7 @@ void SceneRenderer::draw(const Frame& frame) {
   glUniformMatrix4fv(view_projection_location_, 1, GL_FALSE, glm::value_ptr(frame.view_projection));
   glUniform1f(exposure_location_, frame.exposure);
   float flames[kMaxLights] = {};
-  for (size_t l = 0; l < world_->lights.size(); ++l) flames[l] = frame.flame[l];
+  for (size_t l = 0; l < flame_lights_; ++l) flames[l] = frame.flame[l];
   glUniform4fv(flames_location_, kMaxLights / 4, flames);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, frame.light_map);
@@ -207,6 +280,14 @@ void SceneRenderer::draw(const Frame& frame) {
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, frame.indirect_map ? frame.indirect_map : black_);
   glUniform1i(indirect_map_location_, 1);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, shadow_.texture());
+  glUniform1i(lantern_shadow_location_, 2);
+  const glm::vec3 factor = lantern ? frame.lantern_factor : glm::vec3(0.0f);
+  glUniform3fv(lantern_factor_location_, 1, glm::value_ptr(factor));
+  glUniform3fv(lantern_position_location_, 1, glm::value_ptr(frame.lantern_position));
+  glUniform3f(lantern_planes_location_, LanternShadow::kNear, far,
+              frame.lantern_range > 0.0f ? frame.lantern_range : 1.0e9f);
   glActiveTexture(GL_TEXTURE0);
   glBindVertexArray(vao_);
   auto draw_range = [](const IndexRange& r) {
@@ -227,7 +308,17 @@ void SceneRenderer::draw(const Frame& frame) {
     glUniform1f(held_exposure_location_, frame.exposure);
     draw_range(world_->objects[static_cast<size_t>(frame.held_object)].range);
   }
+  if (lantern && !frame.lantern_hidden) {
+    glUseProgram(glow_program_);
+    glUniformMatrix4fv(glow_view_projection_location_, 1, GL_FALSE,
+                       glm::value_ptr(frame.view_projection));
+    glUniform3fv(glow_position_location_, 1, glm::value_ptr(frame.lantern_position));
+    glUniform1f(glow_exposure_location_, frame.exposure);
+    glDrawArrays(GL_POINTS, 0, 1);
+  }
   glBindVertexArray(0);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_CUBE_MAP, 0);
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, 0);
   glActiveTexture(GL_TEXTURE0);

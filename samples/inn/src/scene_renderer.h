@@ -7,14 +7,21 @@
 // albedo a has radiance a * E / pi. Radiance is exposed, tone mapped (1 - exp(-exposure * L)) and
 // encoded with the sRGB curve for an ordinary 8-bit framebuffer.
 //
+// The carried lantern (a moving light) adds its direct light, which the light map leaves to the
+// game: the cooker's punctual irradiance from its position, shadowed by LanternShadow's depth cube
+// map, and a round glow at the flame.
+//
 // The carried item (HeldItem) is drawn the same way, with the irradiance of the light probes
 // where it is instead of the light map: E(n) from the 9 SH coefficients per channel evaluated per
 // fragment for the triangle's normal, clamped at 0.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include <glm/glm.hpp>
+
+#include "lantern_shadow.h"
 
 namespace lightpatch::inn {
 
@@ -44,6 +51,14 @@ class SceneRenderer {
     int32_t held_object = -1;
     glm::mat4 held_model{1.0f};
     const float* held_sh = nullptr;
+    // The lantern: world position (metres), factor (colour * intensity divided by
+    // Runtime::light_map_scale(): the light map texture's units; zero: no lantern light), range
+    // (metres: its glTF range, the shadow's far plane; 0: unlimited).
+    // lantern_hidden: no glow sprite (the camera is at the lantern).
+    glm::vec3 lantern_position{0.0f};
+    glm::vec3 lantern_factor{0.0f};
+    float lantern_range = 0.0f;
+    bool lantern_hidden = false;
     int viewport_width = 0, viewport_height = 0;
   };
   // Draws into the currently bound framebuffer; clears it first.
@@ -51,10 +66,17 @@ class SceneRenderer {
 
  private:
   const World* world_ = nullptr;
+  size_t flame_lights_ = 0;  // lights that may have a flame: the pack's lights before its panes
   uint32_t program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0;
   uint32_t black_ = 0;  // 1x1 zero texture sampled as the indirect map of packs without one
   int view_projection_location_ = -1, light_map_location_ = -1, exposure_location_ = -1,
       flames_location_ = -1, indirect_map_location_ = -1;
+  LanternShadow shadow_;
+  uint32_t glow_program_ = 0;
+  int lantern_position_location_ = -1, lantern_factor_location_ = -1, lantern_planes_location_ = -1,
+      lantern_shadow_location_ = -1;
+  int glow_view_projection_location_ = -1, glow_position_location_ = -1,
+      glow_exposure_location_ = -1;
   uint32_t held_program_ = 0;
   int held_view_projection_location_ = -1, held_model_location_ = -1, held_sh_location_ = -1,
       held_exposure_location_ = -1;

@@ -49,6 +49,7 @@ struct StepRecord {
   std::string item;
   ItemIrradiance item_before{-1.0f, -1.0f}, item_after{-1.0f, -1.0f};
   std::string screenshot, error;
+  std::string state;  // a lantern move: the game's whole state after it (STATE.json, DESIGN.md)
 };
 
 float mean(const std::vector<double>& v) {
@@ -132,6 +133,27 @@ ItemIrradiance measure_item(const PlaySession& s, const glm::mat4& view, SceneSt
   return item_irradiance(sh, facing);
 }
 
+// The game's wanted state in DESIGN.md's format: every light's base (unflickered) state, the
+// lantern's position, every object's visibility.
+nlohmann::ordered_json game_state(const PlaySession& s) {
+  nlohmann::ordered_json lights = nlohmann::ordered_json::object(),
+                         objects = nlohmann::ordered_json::object();
+  for (uint32_t l = 0; l < s.runtime.light_count(); ++l) {
+    if (s.runtime.state().light_is_pane(l)) continue;
+    const LightState& b = s.game->base_light(l);
+    nlohmann::ordered_json j = {
+        {"on", b.on}, {"color", {b.color[0], b.color[1], b.color[2]}}, {"intensity", b.intensity}};
+    if (static_cast<int32_t>(l) == s.game->lantern()) {
+      const glm::vec3 p = s.game->lantern_position();
+      j["position"] = {p.x, p.y, p.z};
+    }
+    lights[s.world.lights[l].name] = j;
+  }
+  for (uint32_t o = 0; o < s.runtime.object_count(); ++o)
+    objects[s.world.objects[o].name] = {{"visible", s.runtime.object_visible(o)}};
+  return {{"lights", lights}, {"objects", objects}};
+}
+
 }  // namespace
 
 int run_scripted(PlaySession& s, const PlayOptions& o) {
@@ -195,6 +217,12 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     f.held_object = held.object;
     f.held_model = held.model;
     f.held_sh = held.sh;
+    if (game.lantern() >= 0) {
+      f.lantern_position = game.lantern_position();
+      // In the light map texture's units, as the maps it is added to.
+      f.lantern_factor = game.lantern_factor() / rt.light_map_scale();
+      f.lantern_range = s.world.lights[static_cast<size_t>(game.lantern())].range;
+    }
     s.renderer.draw(f);
     s.overlay.draw(caption.c_str(), 10, 10, o.height >= 400 ? 2.0f : 1.0f, o.width, o.height);
     glFinish();
@@ -258,6 +286,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     }
 
     int32_t light = -1, object = -1;
+    bool lantern_move = false;
     std::vector<glm::ivec2> meter_texels;
     bool applied = true;
     if (r.action == "light" || r.action == "spell_done") {
@@ -294,6 +323,18 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           applied = game.place(k);
         }
       }
+    } else if (r.action == "carry" || r.action == "move") {
+      if (game.lantern() < 0 || rt.find_light(r.node.c_str()) != game.lantern())
+        throw std::runtime_error("step " + r.name + ": '" + r.node + "' is not the lantern");
+      if (r.action == "carry") {
+        applied = game.take_lantern();
+      } else {
+        const nlohmann::json& at = st.at("state").at("lights").at(r.node).at("position");
+        const glm::vec3 p(at.at(0).get<float>(), at.at(1).get<float>(), at.at(2).get<float>());
+        r.bound = moving_light_bound(rt, s.pack, s.budget);
+        applied = game.move_lantern(p);
+        lantern_move = true;
+      }
     } else if (r.action != "start") {
       throw std::runtime_error("step " + r.name + ": unknown action '" + r.action + "'");
     }
@@ -315,6 +356,11 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           if (ls.contains("color"))
             for (int c = 0; c < 3; ++c)
               same = same && ls["color"][static_cast<size_t>(c)].get<float>() == b.color[c];
+          if (ls.contains("position"))
+            for (int a = 0; a < 3; ++a)
+              same =
+                  same && l == game.lantern() &&
+                  ls["position"][static_cast<size_t>(a)].get<float>() == game.lantern_position()[a];
           if (!same) r.error = "the game's state of " + name + " differs from the step's";
         }
       }
@@ -333,11 +379,12 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     caption = line + game.objective();
     r.applied_frame = frame_no + 1;
     auto landed = [&] {
+      if (lantern_move) return game.lantern_landed();
       if (light >= 0) return game.light_landed(static_cast<uint32_t>(light));
       if (object >= 0) return game.object_landed(static_cast<uint32_t>(object));
       return true;
     };
-    if (light < 0 && object < 0) {
+    if (light < 0 && object < 0 && !lantern_move) {
       r.landed = true;
       r.landed_frame = r.applied_frame;
     } else {
@@ -365,6 +412,13 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     }
 
     char file[160];
+    if (lantern_move) {
+      // What `lightpatch recompose --state` and `bake-state --state` take to check this pose.
+      std::snprintf(file, sizeof file, "%02zu_%s.state.json", i, r.name.c_str());
+      r.state = file;
+      std::ofstream((std::filesystem::path(o.out) / file).string())
+          << game_state(s).dump(1) << "\n";
+    }
     std::snprintf(file, sizeof file, "%02zu_%s.png", i, r.name.c_str());
     r.screenshot = file;
     std::vector<uint8_t> pixels;
@@ -446,16 +500,16 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     std::ofstream f(dir / "steps.csv");
     f << "step,action,node,applied_frame,landed_frame,latency_frames,bound_frames,landed,meter_"
          "before,meter_after,item,item_facing_before,item_facing_after,item_mean_before,item_mean_"
-         "after,screenshot,error\n";
+         "after,screenshot,state,error\n";
     for (const StepRecord& r : records) {
       char row[640];
-      std::snprintf(row, sizeof row,
-                    "%s,%s,%s,%" PRIu64 ",%" PRIu64
-                    ",%u,%u,%d,%.6g,%.6g,%s,%.7g,%.7g,%.7g,%.7g,%s,%s\n",
-                    r.name.c_str(), r.action.c_str(), r.node.c_str(), r.applied_frame,
-                    r.landed_frame, r.latency, r.bound, r.landed ? 1 : 0, r.meter_before,
-                    r.meter_after, r.item.c_str(), r.item_before.facing, r.item_after.facing,
-                    r.item_before.mean, r.item_after.mean, r.screenshot.c_str(), r.error.c_str());
+      std::snprintf(
+          row, sizeof row,
+          "%s,%s,%s,%" PRIu64 ",%" PRIu64 ",%u,%u,%d,%.6g,%.6g,%s,%.7g,%.7g,%.7g,%.7g,%s,%s,%s\n",
+          r.name.c_str(), r.action.c_str(), r.node.c_str(), r.applied_frame, r.landed_frame,
+          r.latency, r.bound, r.landed ? 1 : 0, r.meter_before, r.meter_after, r.item.c_str(),
+          r.item_before.facing, r.item_after.facing, r.item_before.mean, r.item_after.mean,
+          r.screenshot.c_str(), r.state.c_str(), r.error.c_str());
       f << row;
       if (!r.error.empty()) {
         std::fprintf(stderr, "lightpatch-inn: step %s: %s\n", r.name.c_str(), r.error.c_str());

@@ -46,6 +46,10 @@ World build_world(const GltfScene& scene, const PackView& pack) {
     if (pack.light_is_pane(l)) continue;
     wl.name = to_string(pack.light_name(l));
     wl.kind = kind_of(wl.name);
+    if (const int32_t k = pack.moving_index(l); k >= 0) {
+      wl.moving = true;
+      wl.range = pack.moving_light(static_cast<uint32_t>(k)).range;
+    }
     bool found = false;
     for (const GltfLight& gl : scene.lights()) {
       if (gl.name == wl.name) {

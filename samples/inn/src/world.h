@@ -40,6 +40,8 @@ struct WorldLight {
   std::string name;
   LightKind kind = LightKind::kOther;
   glm::vec3 position{0.0f};
+  bool moving = false;  // the pack flags it moving (the lantern): position is its authored pose
+  float range = 0.0f;   // a moving light's range (metres; 0: unlimited)
 };
 
 struct WorldObject {
