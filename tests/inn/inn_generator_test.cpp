@@ -138,6 +138,7 @@ void check_inn(InnScale scale, std::size_t min_tris, std::size_t max_tris,
     if (step["action"] == "move") {
       ++moves;
       EXPECT_EQ(carried, 1u);
+      EXPECT_GE(step.value("frames", 0), 1);  // carried over frames, at a walk
       const json& pose = step["state"]["lights"]["lantern"]["position"];
       ASSERT_EQ(pose.size(), 3u);
       if (!last_pose.is_null()) {

@@ -172,6 +172,8 @@ TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
       // The lantern's panes follow over several frames (runtime.h, "Moving lights"); nothing else
       // changes during the walk, so nothing is pending once it landed.
       EXPECT_EQ(u64(frames[u64(s, "landed_frame") - 1], "pending_changes"), 0u);
+      // Carried at a walk: one pose a frame, the step's last one counted in its latency.
+      EXPECT_EQ(u64(s, "glide_frames") + 1, scenario["steps"][i - 1]["frames"].get<uint64_t>());
       EXPECT_TRUE(std::filesystem::exists(out / s.at("state")));
       moves.push_back(s.at("state"));
       continue;

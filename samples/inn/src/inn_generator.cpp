@@ -477,6 +477,8 @@ void InnBuilder::lantern_walk() {
     // Look at the lantern from behind and above, along the walk.
     Json& st = steps_.back();
     const glm::vec3 from = i > 0 ? lantern_walk_[i - 1] : where_.at(kLantern).second;
+    // Carried at a walk, 1.4 m/s, one pose a frame at 30 frames/s.
+    st["frames"] = std::max(1, int(std::lround(glm::length(p - from) / 1.4f * 30.0f)));
     glm::vec3 back = from - p;
     back.y = 0.0f;
     back = glm::length(back) > 1e-3f ? glm::normalize(back) : glm::vec3(-1, 0, 0);

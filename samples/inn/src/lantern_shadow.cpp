@@ -1,5 +1,7 @@
 #include "lantern_shadow.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -22,6 +24,25 @@ const char* const kDepthFragmentShader = R"(#version 300 es
 precision mediump float;
 void main() {}
 )";
+
+// Can face f (axis f / 2, sign + for even f) of a cube centred at the origin see any of the box
+// [lo, hi] within `far`? Conservative: the box's nearest point within range, and the face's
+// 90-degree pyramid |p_b| <= s p_a, |p_c| <= s p_a against the box's extremes per axis.
+bool face_sees(int f, glm::vec3 lo, glm::vec3 hi, float far) {
+  float d2 = 0.0f;
+  for (int k = 0; k < 3; ++k) {
+    const float d = std::max({lo[k], 0.0f, -hi[k]});
+    d2 += d * d;
+  }
+  if (d2 > far * far) return false;
+  const int a = f / 2, b = (a + 1) % 3, c = (a + 2) % 3;
+  const float reach = f % 2 == 0 ? hi[a] : -lo[a];  // farthest along the face's direction
+  if (!(reach > 0.0f)) return false;
+  auto nearest_abs = [&](int k) {
+    return lo[k] <= 0.0f && hi[k] >= 0.0f ? 0.0f : std::min(std::fabs(lo[k]), std::fabs(hi[k]));
+  };
+  return nearest_abs(b) <= reach && nearest_abs(c) <= reach;
+}
 
 // The cube map's face order and its OpenGL conventions (view direction, up).
 const glm::vec3 kFaceDirection[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
@@ -82,7 +103,7 @@ bool LanternShadow::init(const World& world, char* message, unsigned message_siz
 
 void LanternShadow::update(uint32_t vao, glm::vec3 position, float far,
                            const uint8_t* object_visible) {
-  bool same = drawn_ && position == position_ && far == far_;
+  bool same = drawn_ && glm::distance(position, position_) < kRedrawDistance && far == far_;
   for (size_t o = 0; o < visible_.size() && same; ++o)
     same = (visible_[o] != 0) == (object_visible[o] != 0);
   if (same) return;
@@ -114,7 +135,18 @@ void LanternShadow::update(uint32_t vao, glm::vec3 position, float far,
     const glm::mat4 m =
         projection * glm::lookAt(position, position + kFaceDirection[f], kFaceUp[f]);
     glUniformMatrix4fv(face_matrix_location_, 1, GL_FALSE, glm::value_ptr(m));
-    draw_range(world_->static_range);
+    // The static chunks this face can see, consecutive ones in one draw.
+    IndexRange run{0, 0};
+    for (const WorldChunk& ch : world_->chunks) {
+      if (!face_sees(f, ch.bounds_min - position, ch.bounds_max - position, far)) continue;
+      if (run.count > 0 && run.first + run.count == ch.range.first) {
+        run.count += ch.range.count;
+        continue;
+      }
+      draw_range(run);
+      run = ch.range;
+    }
+    draw_range(run);
     for (size_t o = 0; o < world_->objects.size(); ++o)
       if (visible_[o]) draw_range(world_->objects[o].range);
   }

@@ -4,8 +4,9 @@
 // range and the visible objects), drawn again only when the lantern moved or an object appeared
 // or vanished. SceneRenderer samples it with depth comparison (samplerCubeShadow, bilinear PCF).
 //
-// Cost: six draws of the world's triangles into kFaceSize² depth texels when it is drawn again;
-// nothing otherwise. Every GL object is created in init(); update() creates none.
+// Cost, when it is drawn again: per face the world's static chunks (World::chunks) that face can
+// see within the far plane, and the visible objects, into kFaceSize² depth texels; nothing
+// otherwise. Every GL object is created in init(); update() creates none.
 #pragma once
 
 #include <cstdint>
@@ -21,6 +22,13 @@ class LanternShadow {
  public:
   static constexpr int kFaceSize = 256;
   static constexpr float kNear = 0.05f;  // metres: the lantern's glass
+  // A lantern that moved less than this since the faces were drawn keeps them, looked up from
+  // where they were drawn (origin()): a carried lantern then redraws them every third frame or so
+  // at a walk (1.4 m/s, 30 frames/s), and its shadows trail it by at most this much.
+  static constexpr float kRedrawDistance = 0.08f;  // metres
+  // Occluders farther than this from the lantern are not drawn (its light there is under 1/36 of
+  // what it is at 1 m); a surface beyond it is still shadowed by nearer occluders.
+  static constexpr float kReach = 6.0f;  // metres
 
   LanternShadow() = default;
   ~LanternShadow();
@@ -30,13 +38,16 @@ class LanternShadow {
   // Builds the depth program, the cube texture and its six framebuffers. False with a message.
   bool init(const World& world, char* message, unsigned message_size);
 
-  // Draws the six faces from `position` (world space) out to `far` metres when the position, the
-  // far plane or `object_visible` ([object count]) changed since the last call. `vao`: the
+  // Draws the six faces from `position` (world space) out to `far` metres when the position moved
+  // by kRedrawDistance or more, or the far plane or `object_visible` ([object count]) changed,
+  // since they were last drawn. `vao`: the
   // world's vertex array (SceneRenderer's: attribute 0 the position). Restores the bound
   // framebuffer and viewport it found.
   void update(uint32_t vao, glm::vec3 position, float far, const uint8_t* object_visible);
 
   uint32_t texture() const { return texture_; }
+  // Where the faces were drawn from (world space, metres): the lookups' origin.
+  glm::vec3 origin() const { return position_; }
   float far_plane() const { return far_; }
   // Times the faces were drawn since init() (the scripted run reports it).
   uint64_t redraws() const { return redraws_; }

@@ -1,5 +1,6 @@
 #include "scene_renderer.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdio>
 #include <string>
@@ -59,6 +60,7 @@ uniform sampler2D u_indirect_map;
 // The lantern's direct light (SceneRenderer::Frame): the cooker's punctual irradiance
 // (direct_light.cpp: cos / d^2 times the glTF range window), shadowed by its depth cube map.
 uniform vec3 u_lantern_position;
+uniform vec3 u_lantern_shadow_origin;  // where the depth cube map was drawn from
 uniform vec3 u_lantern_factor;  // 0: no lantern
 uniform vec3 u_lantern_planes;  // near, far, range
 uniform highp samplerCubeShadow u_lantern_shadow;
@@ -78,7 +80,7 @@ vec3 lantern_irradiance() {
   if (c <= 0.0 || window <= 0.0) return vec3(0.0);
   // The fragment's depth in the cube face it falls on, pulled towards the lantern by a bias that
   // grows with the distance (the depth texels' footprint).
-  vec3 v = -to;
+  vec3 v = v_position - u_lantern_shadow_origin;
   float m = max(abs(v.x), max(abs(v.y), abs(v.z)));
   m = max(m - (0.02 + 0.015 * m), u_lantern_planes.x);
   float nr = u_lantern_planes.x, fr = u_lantern_planes.y;
@@ -193,6 +195,7 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   flames_location_ = glGetUniformLocation(program_, "u_flames");
   lantern_position_location_ = glGetUniformLocation(program_, "u_lantern_position");
   lantern_factor_location_ = glGetUniformLocation(program_, "u_lantern_factor");
+  lantern_origin_location_ = glGetUniformLocation(program_, "u_lantern_shadow_origin");
   lantern_planes_location_ = glGetUniformLocation(program_, "u_lantern_planes");
   lantern_shadow_location_ = glGetUniformLocation(program_, "u_lantern_shadow");
   glow_program_ =
@@ -248,10 +251,9 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
 
 void SceneRenderer::draw(const Frame& frame) {
   const bool lantern = frame.lantern_factor != glm::vec3(0.0f);
-  // The shadow reaches as far as the light, or across the whole world for an unlimited one.
-  const float far = frame.lantern_range > 0.0f
-                        ? frame.lantern_range
-                        : glm::length(world_->bounds_max - world_->bounds_min) + 1.0f;
+  // The shadow reaches as far as the light (within LanternShadow::kReach).
+  const float far =
+      std::min(frame.lantern_range > 0.0f ? frame.lantern_range : 1.0e9f, LanternShadow::kReach);
   if (lantern) shadow_.update(vao_, frame.lantern_position, far, frame.object_visible);
   glViewport(0, 0, frame.viewport_width, frame.viewport_height);
   glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
@@ -286,6 +288,8 @@ void SceneRenderer::draw(const Frame& frame) {
   const glm::vec3 factor = lantern ? frame.lantern_factor : glm::vec3(0.0f);
   glUniform3fv(lantern_factor_location_, 1, glm::value_ptr(factor));
   glUniform3fv(lantern_position_location_, 1, glm::value_ptr(frame.lantern_position));
+  const glm::vec3 origin = shadow_.origin();
+  glUniform3fv(lantern_origin_location_, 1, glm::value_ptr(origin));
   glUniform3f(lantern_planes_location_, LanternShadow::kNear, far,
               frame.lantern_range > 0.0f ? frame.lantern_range : 1.0e9f);
   glActiveTexture(GL_TEXTURE0);

@@ -53,7 +53,7 @@ class SceneRenderer {
     const float* held_sh = nullptr;
     // The lantern: world position (metres), factor (colour * intensity divided by
     // Runtime::light_map_scale(): the light map texture's units; zero: no lantern light), range
-    // (metres: its glTF range, the shadow's far plane; 0: unlimited).
+    // (metres: its glTF range, 0: unlimited; the shadow's far plane within LanternShadow::kReach).
     // lantern_hidden: no glow sprite (the camera is at the lantern).
     glm::vec3 lantern_position{0.0f};
     glm::vec3 lantern_factor{0.0f};
@@ -73,8 +73,8 @@ class SceneRenderer {
       flames_location_ = -1, indirect_map_location_ = -1;
   LanternShadow shadow_;
   uint32_t glow_program_ = 0;
-  int lantern_position_location_ = -1, lantern_factor_location_ = -1, lantern_planes_location_ = -1,
-      lantern_shadow_location_ = -1;
+  int lantern_position_location_ = -1, lantern_factor_location_ = -1, lantern_origin_location_ = -1,
+      lantern_planes_location_ = -1, lantern_shadow_location_ = -1;
   int glow_view_projection_location_ = -1, glow_position_location_ = -1,
       glow_exposure_location_ = -1;
   uint32_t held_program_ = 0;

@@ -50,6 +50,9 @@ struct StepRecord {
   ItemIrradiance item_before{-1.0f, -1.0f}, item_after{-1.0f, -1.0f};
   std::string screenshot, error;
   std::string state;  // a lantern move: the game's whole state after it (STATE.json, DESIGN.md)
+  // A lantern move carried over frames ("frames" in the step): how many, and their mean total ms.
+  uint32_t glide_frames = 0;
+  double glide_ms = 0.0;
 };
 
 float mean(const std::vector<double>& v) {
@@ -331,8 +334,20 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
       } else {
         const nlohmann::json& at = st.at("state").at("lights").at(r.node).at("position");
         const glm::vec3 p(at.at(0).get<float>(), at.at(1).get<float>(), at.at(2).get<float>());
+        // Carried there at a walk: one pose a frame along the way ("frames"), the last one below;
+        // the latency counts from the frame of the last pose.
+        const int glide = std::max(1, st.value("frames", 1));
+        const glm::vec3 from = game.lantern_position();
+        const size_t first_frame = frames.size();
+        for (int k = 1; k < glide && applied; ++k) {
+          applied = game.move_lantern(glm::mix(from, p, float(k) / float(glide)));
+          frame(r.name, true);
+        }
+        r.glide_frames = static_cast<uint32_t>(frames.size() - first_frame);
+        for (size_t k = first_frame; k < frames.size(); ++k) r.glide_ms += frames[k].total_ms;
+        if (r.glide_frames) r.glide_ms /= r.glide_frames;
         r.bound = moving_light_bound(rt, s.pack, s.budget);
-        applied = game.move_lantern(p);
+        applied = applied && game.move_lantern(p);
         lantern_move = true;
       }
     } else if (r.action != "start") {
@@ -500,16 +515,17 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     std::ofstream f(dir / "steps.csv");
     f << "step,action,node,applied_frame,landed_frame,latency_frames,bound_frames,landed,meter_"
          "before,meter_after,item,item_facing_before,item_facing_after,item_mean_before,item_mean_"
-         "after,screenshot,state,error\n";
+         "after,screenshot,state,glide_frames,glide_ms,error\n";
     for (const StepRecord& r : records) {
       char row[640];
-      std::snprintf(
-          row, sizeof row,
-          "%s,%s,%s,%" PRIu64 ",%" PRIu64 ",%u,%u,%d,%.6g,%.6g,%s,%.7g,%.7g,%.7g,%.7g,%s,%s,%s\n",
-          r.name.c_str(), r.action.c_str(), r.node.c_str(), r.applied_frame, r.landed_frame,
-          r.latency, r.bound, r.landed ? 1 : 0, r.meter_before, r.meter_after, r.item.c_str(),
-          r.item_before.facing, r.item_after.facing, r.item_before.mean, r.item_after.mean,
-          r.screenshot.c_str(), r.state.c_str(), r.error.c_str());
+      std::snprintf(row, sizeof row,
+                    "%s,%s,%s,%" PRIu64 ",%" PRIu64
+                    ",%u,%u,%d,%.6g,%.6g,%s,%.7g,%.7g,%.7g,%.7g,%s,%s,%u,%.3f,%s\n",
+                    r.name.c_str(), r.action.c_str(), r.node.c_str(), r.applied_frame,
+                    r.landed_frame, r.latency, r.bound, r.landed ? 1 : 0, r.meter_before,
+                    r.meter_after, r.item.c_str(), r.item_before.facing, r.item_after.facing,
+                    r.item_before.mean, r.item_after.mean, r.screenshot.c_str(), r.state.c_str(),
+                    r.glide_frames, r.glide_ms, r.error.c_str());
       f << row;
       if (!r.error.empty()) {
         std::fprintf(stderr, "lightpatch-inn: step %s: %s\n", r.name.c_str(), r.error.c_str());

@@ -128,6 +128,48 @@ World build_world(const GltfScene& scene, const PackView& pack) {
     for (uint32_t i = 0; i < mr.index_count; ++i) out.push_back(base + idx[i]);
   }
 
+  // Static triangles by grid cell of their centroid (a stable sort: the order within a cell is
+  // the pack's), one chunk per cell.
+  {
+    const size_t triangles = static_indices.size() / 3;
+    std::vector<std::pair<uint64_t, uint32_t>> key(triangles);
+    for (size_t t = 0; t < triangles; ++t) {
+      glm::vec3 c(0.0f);
+      for (int k = 0; k < 3; ++k) {
+        const float* p = w.vertices[static_indices[t * 3 + size_t(k)]].position;
+        c += glm::vec3(p[0], p[1], p[2]) / 3.0f;
+      }
+      uint64_t cell = 0;
+      for (int a = 0; a < 3; ++a) {
+        // Cells of 2 m over +-2^20 m: 21 bits an axis.
+        const float f = std::floor(c[a] / World::kChunkSize) + float(1 << 20);
+        cell = (cell << 21) | uint64_t(std::clamp(f, 0.0f, float((1 << 21) - 1)));
+      }
+      key[t] = {cell, static_cast<uint32_t>(t)};
+    }
+    std::stable_sort(key.begin(), key.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<uint32_t> sorted = static_indices;
+    for (size_t i = 0; i < triangles; ++i) {
+      for (int k = 0; k < 3; ++k)
+        sorted[i * 3 + size_t(k)] = static_indices[size_t(key[i].second) * 3 + size_t(k)];
+      if (i == 0 || key[i].first != key[i - 1].first) {
+        WorldChunk ch;
+        ch.range.first = static_cast<uint32_t>(i * 3);
+        ch.bounds_min = glm::vec3(std::numeric_limits<float>::max());
+        ch.bounds_max = glm::vec3(-std::numeric_limits<float>::max());
+        w.chunks.push_back(ch);
+      }
+      WorldChunk& ch = w.chunks.back();
+      ch.range.count += 3;
+      for (int k = 0; k < 3; ++k) {
+        const float* p = w.vertices[sorted[i * 3 + size_t(k)]].position;
+        ch.bounds_min = glm::min(ch.bounds_min, glm::vec3(p[0], p[1], p[2]));
+        ch.bounds_max = glm::max(ch.bounds_max, glm::vec3(p[0], p[1], p[2]));
+      }
+    }
+    static_indices = std::move(sorted);
+  }
   w.static_range = {0, static_cast<uint32_t>(static_indices.size())};
   w.indices = std::move(static_indices);
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());

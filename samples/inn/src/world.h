@@ -51,10 +51,22 @@ struct WorldObject {
   glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
 };
 
+// A run of static triangles in one cell of a world-space grid, and their bounds: what a draw that
+// sees only part of the world (the lantern's shadow faces) culls by.
+struct WorldChunk {
+  IndexRange range;
+  glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
+};
+
 struct World {
+  static constexpr float kChunkSize = 2.0f;  // metres: the grid cells of `chunks`
+
   std::vector<WorldVertex> vertices;
   std::vector<uint32_t> indices;
-  IndexRange static_range;           // everything that is not a semi-dynamic object
+  IndexRange static_range;  // everything that is not a semi-dynamic object
+  // static_range's triangles sorted by grid cell (kChunkSize), one chunk per non-empty cell, in
+  // index order: together exactly static_range.
+  std::vector<WorldChunk> chunks;
   std::vector<WorldLight> lights;    // per pack light index
   std::vector<WorldObject> objects;  // per pack object index
   bool double_sided = false;         // some material is double-sided: draw without culling
