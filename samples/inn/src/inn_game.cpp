@@ -102,6 +102,16 @@ void InnGame::apply_state(const nlohmann::json& state) {
       }
       if (s.contains("intensity")) lights_[l].intensity = s["intensity"].get<float>();
       push_light(l);
+      if (s.contains("position")) {
+        // A moving light's pose (DESIGN.md's state format): the lantern hangs there.
+        LightPose pose = rt_.light_pose(l);
+        for (int a = 0; a < 3; ++a)
+          pose.position[a] = s["position"].at(static_cast<size_t>(a)).get<float>();
+        if (rt_.set_light_pose(l, pose) != Status::kOk)
+          throw std::runtime_error("state: light '" + name + "' cannot take that position");
+        if (static_cast<int32_t>(l) == lantern_)
+          lantern_position_ = {pose.position[0], pose.position[1], pose.position[2]};
+      }
     }
   }
   if (state.contains("objects")) {

@@ -30,7 +30,8 @@ class InnGame {
   InnGame(Runtime& runtime, const World& world, const nlohmann::json& scenario);
 
   // Applies a scene state in DESIGN.md's format (the initial state, a scripted step) to the
-  // lights' and objects' base state and to the runtime's wanted state. Throws on unknown names.
+  // lights' and objects' base state and to the runtime's wanted state, a moving light's position
+  // included. Throws on unknown names and on a position the runtime refuses.
   void apply_state(const nlohmann::json& state);
 
   // Gameplay actions; false (and nothing changes) when the action does not apply.
