@@ -574,8 +574,9 @@ SyntheticOptions pane_probe_options(uint32_t seed) {
 // A pane's probe set is a contribution set (pack_format.h, "Moving lights"): accepted; a moving
 // light's set and a pane's shadow set are refused.
 TEST(MovingLights, PanesHaveContributionProbeSetsAndMovingLightsNone) {
+  const SyntheticPack bytes = make_synthetic_pack(pane_probe_options(6));  // v reads them
   PackView v;
-  ASSERT_EQ(open_message(make_synthetic_pack(pane_probe_options(6)), &v), "");
+  ASSERT_EQ(open_message(bytes, &v), "");
   uint32_t pane_sets = 0;
   for (uint32_t s = 0; s < v.probe_set_count(); ++s)
     pane_sets += v.probe_set(s).light != pack::kNone16 && v.light_is_pane(v.probe_set(s).light);
