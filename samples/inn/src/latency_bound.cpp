@@ -17,6 +17,13 @@ uint64_t group_area(const PackView& pack, uint32_t g) {
   return a;
 }
 
+// Everything the pack could draw: a rebuild never costs more.
+uint64_t everything(const PackView& pack) {
+  uint64_t all = uint64_t(pack.lightmap_width()) * pack.lightmap_height();
+  for (uint32_t g = 0; g < pack.group_count(); ++g) all += group_area(pack, g);
+  return all;
+}
+
 }  // namespace
 
 uint32_t rebuild_frames_bound(const PackView& pack, uint64_t texels, uint64_t budget) {
@@ -36,9 +43,7 @@ uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint
   const uint64_t cost = light >= 0 ? p.light_change_texels(static_cast<uint32_t>(light))
                                    : p.object_change_texels(static_cast<uint32_t>(object));
   if (!rebuilding && !dims && cost <= budget && cost < p.rebuild_texels()) return 1;
-  // Everything the pack could draw: a rebuild never costs more.
-  uint64_t all = uint64_t(pack.lightmap_width()) * pack.lightmap_height();
-  for (uint32_t g = 0; g < pack.group_count(); ++g) all += group_area(pack, g);
+  const uint64_t all = everything(pack);
   uint32_t bound = rebuild_frames_bound(pack, all, budget) + 1;
   if (rebuilding) {
     const uint64_t left = runtime.ready() ? runtime.stats().rebuild_remaining_texels : all;
@@ -50,9 +55,7 @@ uint32_t change_latency_bound(const Runtime& runtime, const PackView& pack, uint
 uint32_t moving_light_bound(const Runtime& runtime, const PackView& pack, uint64_t budget) {
   const uint32_t per_update = std::max(1u, runtime.limits().max_pane_changes);
   const uint32_t pushes = (pack.pane_count() + per_update - 1) / per_update;
-  uint64_t all = uint64_t(pack.lightmap_width()) * pack.lightmap_height();
-  for (uint32_t g = 0; g < pack.group_count(); ++g) all += group_area(pack, g);
-  return pushes + 2 * rebuild_frames_bound(pack, all, budget) + 1;
+  return pushes + 2 * rebuild_frames_bound(pack, everything(pack), budget) + 1;
 }
 
 }  // namespace lightpatch::inn
