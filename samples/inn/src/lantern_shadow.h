@@ -23,7 +23,7 @@ class LanternShadow {
   static constexpr int kFaceSize = 256;
   static constexpr float kNear = 0.05f;  // metres: the lantern's glass
   // A lantern that moved less than this since the faces were drawn keeps them, looked up from
-  // where they were drawn (origin()): a carried lantern then redraws them every third frame or so
+  // where they were drawn (origin()): a carried lantern then redraws them every second frame
   // at a walk (1.4 m/s, 30 frames/s), and its shadows trail it by at most this much.
   static constexpr float kRedrawDistance = 0.08f;  // metres
   // Occluders farther than this from the lantern are not drawn (its light there is under 1/36 of
