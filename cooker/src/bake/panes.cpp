@@ -33,9 +33,7 @@ void BakeSession::bake_panes(BakedMaps& maps, Progress& progress, Report& report
   maps.panes = cluster_panes(scene, texels, b.tracer, co);
   const double cluster_s = progress.end();
 
-  std::vector<int32_t> pane_of(texels.valid.size(), -1);
-  for (size_t k = 0; k < maps.panes.size(); ++k)
-    for (uint32_t t : maps.panes[k].texels) pane_of[t] = int32_t(k);
+  const std::vector<int32_t> pane_of = pane_of_texels(maps.panes, texels.valid.size());
   const DirectPoints* pts = b.indirect->direct_points();
   const bool points = pts && pts->size() > 0;
   const float threshold = pane_significance(scene, b.output_step);

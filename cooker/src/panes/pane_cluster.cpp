@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "lightpatch/cooker/error.h"
 #include "lightpatch/moving_lights.h"
 #include "worker_pool.h"
 
@@ -221,6 +223,19 @@ float strongest_moving_light(const Scene& scene) {
       strongest = std::max(strongest, std::max({l.color.x, l.color.y, l.color.z}) * l.intensity);
   }
   return strongest > 0.0f && std::isfinite(strongest) ? strongest : 1.0f;
+}
+
+std::vector<int32_t> pane_of_texels(const std::vector<PaneMap>& panes, size_t texel_count) {
+  std::vector<int32_t> pane_of(texel_count, -1);
+  for (size_t k = 0; k < panes.size(); ++k) {
+    for (uint32_t t : panes[k].texels) {
+      if (t >= pane_of.size() || pane_of[t] >= 0)
+        throw CookError("pane " + std::to_string(k) + ": texel " + std::to_string(t) +
+                        " out of range or in two panes");
+      pane_of[t] = int32_t(k);
+    }
+  }
+  return pane_of;
 }
 
 float pane_significance(const Scene& scene, float step) {

@@ -27,6 +27,10 @@ struct PaneClusterOptions {
 std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
                                    const PaneClusterOptions& options);
 
+// Each of `texel_count` texels' pane (index into `panes`), -1 for none. Throws CookError when a
+// texel is out of range or in two panes (cluster_panes() partitions them).
+std::vector<int32_t> pane_of_texels(const std::vector<PaneMap>& panes, size_t texel_count);
+
 // A pane map's significance (irradiance per unit irradiance on the pane): it keeps what shows as
 // half an 8-bit step (`step`: the output step, or half of it for patches) with the brightest
 // moving light 1 m from the pane, where its weight is that light's intensity; nearer, the weight

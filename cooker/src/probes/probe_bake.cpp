@@ -20,7 +20,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <string>
 #include <tuple>
 
 #include "direct_light.h"
@@ -28,6 +27,7 @@
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/probes.h"
 #include "lightpatch/spherical_harmonics.h"
+#include "panes/pane_cluster.h"
 #include "probes/probe_rays.h"
 #include "surface_albedo.h"
 #include "worker_pool.h"
@@ -228,15 +228,7 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
   // each texel is a member of one pane at most (cluster_panes partitions them).
   const size_t panes = maps.panes.size();
   const int first_pane = int(maps.lights.size() + maps.moving_lights.size());
-  std::vector<int32_t> pane_of(texels.valid.size(), -1);
-  for (size_t k = 0; k < panes; ++k) {
-    for (uint32_t t : maps.panes[k].texels) {
-      if (t >= pane_of.size() || pane_of[t] >= 0)
-        throw CookError("pane " + std::to_string(k) + ": texel " + std::to_string(t) +
-                        " out of range or in two panes");
-      pane_of[t] = int32_t(k);
-    }
-  }
+  const std::vector<int32_t> pane_of = pane_of_texels(maps.panes, texels.valid.size());
 
   std::vector<std::vector<std::pair<SetKey, Sh>>> per_probe(probes.probes.size());
   progress.begin("light probes", probes.probes.size());

@@ -18,6 +18,14 @@ glm::vec3 lantern_hand_position(const glm::mat4& view) {
   return glm::vec3(glm::inverse(view) * in_view);
 }
 
+void light_lantern(const InnGame& game, const World& world, float light_map_scale,
+                   SceneRenderer::Frame* frame) {
+  if (game.lantern() < 0) return;
+  frame->lantern_position = game.lantern_position();
+  frame->lantern_factor = game.lantern_factor() / light_map_scale;
+  frame->lantern_range = world.lights[static_cast<size_t>(game.lantern())].range;
+}
+
 HeldItem hold_item(const InnGame& game, const World& world, const LightProbes& probes,
                    const glm::mat4& view) {
   HeldItem held;

@@ -9,6 +9,7 @@
 #include <glm/glm.hpp>
 
 #include "lightpatch/light_probes.h"
+#include "scene_renderer.h"
 
 namespace lightpatch::inn {
 
@@ -27,6 +28,11 @@ struct HeldItem {
 glm::vec3 hand_position(const glm::mat4& view);
 // Where the other hand holds the lantern: 0.5 m ahead, 0.25 m left and 0.12 m down.
 glm::vec3 lantern_hand_position(const glm::mat4& view);
+// The lantern's direct light (on its hook or carried) into the frame: its position, range and
+// factor in the light map texture's units (`light_map_scale`: Runtime::light_map_scale()), as the
+// maps it is added to. Nothing when the game has no lantern.
+void light_lantern(const InnGame& game, const World& world, float light_map_scale,
+                   SceneRenderer::Frame* frame);
 
 // The first carried item of `game` at the hand of a camera with this view, with the probes' SH
 // there. object -1 when nothing is carried or the pack has no probes there. Allocates nothing.

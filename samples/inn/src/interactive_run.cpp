@@ -155,12 +155,7 @@ int run_interactive(PlaySession& s, const PlayOptions& o) {
     f.held_object = held.object;
     f.held_model = held.model;
     f.held_sh = held.sh;
-    if (game.lantern() >= 0) {
-      f.lantern_position = game.lantern_position();
-      // In the light map texture's units, as the maps it is added to.
-      f.lantern_factor = game.lantern_factor() / rt.light_map_scale();
-      f.lantern_range = s.world.lights[static_cast<size_t>(game.lantern())].range;
-    }
+    light_lantern(game, s.world, rt.light_map_scale(), &f);
     s.renderer.draw(f);
 
     const FrameStats& st = rt.stats();

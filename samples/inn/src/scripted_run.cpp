@@ -220,12 +220,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     f.held_object = held.object;
     f.held_model = held.model;
     f.held_sh = held.sh;
-    if (game.lantern() >= 0) {
-      f.lantern_position = game.lantern_position();
-      // In the light map texture's units, as the maps it is added to.
-      f.lantern_factor = game.lantern_factor() / rt.light_map_scale();
-      f.lantern_range = s.world.lights[static_cast<size_t>(game.lantern())].range;
-    }
+    light_lantern(game, s.world, rt.light_map_scale(), &f);
     s.renderer.draw(f);
     s.overlay.draw(caption.c_str(), 10, 10, o.height >= 400 ? 2.0f : 1.0f, o.width, o.height);
     glFinish();
