@@ -105,7 +105,9 @@ constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 
 // powers of two (a version 2 reader would call such a pack corrupt), and patches touch in the
 // atlas (no gutter); a 1-channel patch may draw into one map channel (kFlagDestinationMask).
 // Version 4: light probes (sections 10-13). Version 5: moving lights and their panes (sections
-// 14-15, LightRecord::flags, kLightPane). A reader accepts its own version only.
+// 14-15, LightRecord::flags, kLightPane); later in version 5, magnified patches (PatchFlags
+// kFlagLevelMask), which a reader built before them refuses as unknown patch flags. A reader
+// accepts its own version only.
 constexpr uint32_t kVersion = 5;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
@@ -248,12 +250,36 @@ enum PatchFlags : uint8_t {
   // adds it to R, G or B only (one channel of a tinted patch stored apart, so that it can fill an
   // atlas's alpha plane, which 3-channel patches leave to 1-channel ones).
   kFlagDestinationMask = 3u << 1,
+  // Bits 3-4: the patch's level L (0..3, "Magnified patches" below). 0: the atlas rectangle
+  // holds the patch texel for texel.
+  kFlagLevelMask = 3u << 3,
 };
 constexpr unsigned kFlagDestinationShift = 1;
+constexpr unsigned kFlagLevelShift = 3;
+constexpr unsigned kMaxPatchLevel = 3;
 
 // The one map channel a patch draws into (0, 1 or 2), or -1 for all three.
 constexpr int patch_destination(uint8_t flags) {
   return int((flags & kFlagDestinationMask) >> kFlagDestinationShift) - 1;
+}
+
+// Magnified patches. A patch of level L > 0 is stored at 1/2^L of its target map's resolution
+// per axis (smooth light, such as a moving light's pane, costs 4^L times fewer atlas texels):
+// PatchRecord::width and height stay its destination rectangle in target-map texels, and its
+// atlas rectangle at (atlas_x, atlas_y) is ceil(width / 2^L) x ceil(height / 2^L) texels. The
+// value at destination texel (x, y) of the patch (0 <= x < width, 0 <= y < height) is the
+// bilinear interpolation of the patch's decoded, signed atlas values at atlas-rectangle texel
+// coordinates
+//   s = ((x + 0.5) / 2^L - 0.5, (y + 0.5) / 2^L - 0.5),
+// i = floor(s), f = s - i, reading texels i and i + 1 per axis clamped to the rectangle
+// [0, ceil(width / 2^L) - 1] x [0, ceil(height / 2^L) - 1]: a patch reads only its own texels,
+// never its atlas neighbours'. Decoding (scale, square) comes before interpolation.
+constexpr uint32_t patch_level(uint8_t flags) {
+  return (uint32_t(flags) & kFlagLevelMask) >> kFlagLevelShift;
+}
+// The atlas rectangle's side for a destination side of `side` texels at level `level`.
+constexpr uint32_t patch_atlas_side(uint32_t side, uint32_t level) {
+  return (side + (1u << level) - 1u) >> level;
 }
 
 // One light patch: a rectangle of an atlas copied (decoded, scaled) to a rectangle of its target
@@ -262,7 +288,7 @@ constexpr int patch_destination(uint8_t flags) {
 // group's patches that target the light map come first, then those that target the indirect map.
 struct PatchRecord {
   uint16_t atlas_x, atlas_y;  // top-left texel in the atlas
-  uint16_t width, height;     // texels, >= 1
+  uint16_t width, height;     // destination texels, >= 1 (atlas texels: patch_atlas_side)
   uint16_t dest_x, dest_y;    // top-left texel in the target map
   uint8_t atlas;              // atlas index
   uint8_t channel;            // first atlas channel (0=R .. 3=A)
