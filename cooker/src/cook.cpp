@@ -102,6 +102,7 @@ int layout_align(const BakeOptions& bake) {
 PackOptions pack_options(const BakeOptions& bake) {
   PackOptions po;
   po.keep_colour = !bake.plan_effects;
+  po.pane_level = bake.pane_level >= 0 ? bake.pane_level : kDefaultPaneLevel;
   return po;
 }
 

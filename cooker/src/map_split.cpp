@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "lightpatch/cooker/error.h"
 #include "lightpatch/indirect_map.h"
 #include "lightpatch/patch_decode.h"
 
@@ -41,6 +42,7 @@ std::vector<Region> coarse_regions(const std::vector<Region>& regions, int scale
 }
 
 void add_decoded(const SourcePatch& patch, const QuantizedPatch& q, FloatImage& map) {
+  if (patch.level != 0) throw CookError("add_decoded: a magnified patch");
   const float sign = patch.negative ? -1.0f : 1.0f;
   const Rect& r = patch.dest;
   for (int y = 0; y < r.h; ++y)

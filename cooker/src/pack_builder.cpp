@@ -92,17 +92,19 @@ std::vector<StoredPatch> whole_patches(const std::vector<SourcePatch>& patches) 
 // the same bytes, so the recomposition is too.
 std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches,
                                          bool contributions_too) {
+  // Texels drawn (destination) and atlas texels (fewer for a magnified patch).
   auto texels = [&](size_t i) { return int64_t(patches[i].dest.w) * patches[i].dest.h; };
+  auto stored = [&](size_t i) { return int64_t(patches[i].stored_w()) * patches[i].stored_h(); };
   auto largest_first = [&](std::vector<size_t>& v) {
-    std::stable_sort(v.begin(), v.end(), [&](size_t a, size_t b) { return texels(a) > texels(b); });
+    std::stable_sort(v.begin(), v.end(), [&](size_t a, size_t b) { return stored(a) > stored(b); });
   };
-  int64_t rgb = 0, grey = 0;  // texels of 3-channel patches, channel-texels of 1-channel ones
+  int64_t rgb = 0, grey = 0;  // atlas texels of 3-channel patches, channel-texels of 1-channel
   std::vector<size_t> unlit;  // tinted patches of groups without a light
   std::map<int, std::vector<size_t>> contributions;  // tinted C_l patches by light
   std::map<int, int64_t> change;                     // texels each light's change draws
   for (size_t i = 0; i < patches.size(); ++i) {
     const SourcePatch& p = patches[i];
-    (p.channels == 3 ? rgb : grey) += texels(i);
+    (p.channels == 3 ? rgb : grey) += stored(i);
     if (group_has_light(p.kind)) change[p.light] += texels(i);
     if (p.channels != 3) continue;
     if (!group_has_light(p.kind))
@@ -112,7 +114,7 @@ std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches
   }
   std::vector<uint8_t> split(patches.size(), 0);
   auto try_split = [&](size_t i) {
-    const int64_t t = texels(i);
+    const int64_t t = stored(i);
     if (grey + 3 * t > rgb - t) return false;  // a smaller one may still fit
     grey += 3 * t;
     rgb -= t;
@@ -156,7 +158,7 @@ std::vector<PackItem> pack_items(const std::vector<SourcePatch>& patches,
   std::vector<PackItem> items(stored.size());
   for (size_t i = 0; i < stored.size(); ++i) {
     const SourcePatch& p = patches[stored[i].source];
-    items[i] = PackItem{p.dest.w, p.dest.h, stored[i].destination >= 0 ? 1 : p.channels};
+    items[i] = PackItem{p.stored_w(), p.stored_h(), stored[i].destination >= 0 ? 1 : p.channels};
   }
   return items;
 }
@@ -558,7 +560,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     };
     auto cost = [](const std::vector<SourcePatch>& v) {
       uint64_t n = 0;
-      for (const SourcePatch& p : v) n += uint64_t(p.dest.w) * uint64_t(p.dest.h) * p.channels;
+      for (const SourcePatch& p : v)
+        n += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * p.channels;
       return n;
     };
     std::vector<SourcePatch>& plain = per_job[size_t(i)];
@@ -574,15 +577,20 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       std::vector<SourcePatch> indirect;
       // A grey map's bounce part is grey too (one channel where the bounce is untinted).
       cut(*j.indirect, coarse, kTargetIndirectMap, indirect, split_colour[size_t(i)]);
+      // A pane is bounce light alone, smooth, and has no light-map part to take back what a
+      // coarser level blurs: stored at options.pane_level (pack_format.h, "Magnified patches").
+      if (j.indirect_only && options.pane_level > 0) {
+        for (SourcePatch& p : indirect) reduce_patch(p, options.pane_level);
+      }
       std::vector<QuantizedPatch>& indirect_q = per_job_q[size_t(i)];
       indirect_q.resize(indirect.size());
-      FloatImage decoded(coarse_w, coarse_h, 3);
-      for (size_t k = 0; k < indirect.size(); ++k) {
+      for (size_t k = 0; k < indirect.size(); ++k)
         indirect_q[k] = quantize_patch(indirect[k], options.encoding);
-        add_decoded(indirect[k], indirect_q[k], decoded);
-      }
       std::vector<SourcePatch>& detail = split_patches[size_t(i)];
       if (!j.indirect_only) {
+        FloatImage decoded(coarse_w, coarse_h, 3);
+        for (size_t k = 0; k < indirect.size(); ++k)
+          add_decoded(indirect[k], indirect_q[k], decoded);
         cut(light_map_part(*j.map, decoded, scale), layout.regions, kTargetLightMap, detail,
             split_colour[size_t(i)]);
       }
@@ -749,12 +757,12 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     const int first = std::max(destination, 0), count = destination >= 0 ? 1 : p.channels;
     PackContents::Atlas& atlas = c.atlases[size_t(pl.atlas)];
     // The patch texels only: the runtime never reads outside a patch's rectangle.
-    for (int y = 0; y < p.dest.h; ++y) {
-      for (int x = 0; x < p.dest.w; ++x) {
+    for (int y = 0; y < p.stored_h(); ++y) {
+      for (int x = 0; x < p.stored_w(); ++x) {
         uint8_t* dst = &atlas.rgba[(size_t(pl.y + y) * atlas.width + size_t(pl.x + x)) * 4 +
                                    size_t(pl.channel)];
         const uint8_t* src =
-            &q.codes[(size_t(y) * p.dest.w + size_t(x)) * size_t(p.channels) + size_t(first)];
+            &q.codes[(size_t(y) * p.stored_w() + size_t(x)) * size_t(p.channels) + size_t(first)];
         for (int ch = 0; ch < count; ++ch) dst[ch] = src[ch];
       }
     }
@@ -771,7 +779,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     r.encoding = q.encoding;
     r.scale = q.scale;
     r.flags = uint8_t((p.negative ? kFlagNegative : 0) |
-                      (destination >= 0 ? (destination + 1) << kFlagDestinationShift : 0));
+                      (destination >= 0 ? (destination + 1) << kFlagDestinationShift : 0) |
+                      (uint32_t(p.level) << kFlagLevelShift));
     r.target = p.target;
     c.patches.push_back(r);
   }
@@ -892,6 +901,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       count[p.target != 0] += 1;
       texels[p.target != 0] += uint64_t(p.dest.w) * uint64_t(p.dest.h);
     }
+    uint64_t magnified = 0, magnified_texels = 0, magnified_atlas = 0;
+    for (const SourcePatch& p : patches) {
+      if (p.level == 0) continue;
+      ++magnified;
+      magnified_texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      magnified_atlas += uint64_t(p.stored_w()) * uint64_t(p.stored_h());
+    }
+    j["magnified_patches"] = {
+        {"pane_level", options.pane_level},
+        {"patches", magnified},
+        {"destination_texels", magnified_texels},
+        {"atlas_texels", magnified_atlas},
+        {"rule",
+         "moving lights' panes are stored at 1/2^pane_level of the indirect map's resolution "
+         "(means of 2^level x 2^level texel blocks) and magnified bilinearly inside each patch "
+         "by the runtime"}};
     j["patches_by_target"] = {{"light_map", count[0]}, {"indirect_map", count[1]}};
     j["texels_by_target"] = {{"light_map", texels[0]}, {"indirect_map", texels[1]}};
     nlohmann::json& im = j["indirect_map"];

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/pack_format.h"
 
 namespace lightpatch::cooker {
 
@@ -88,6 +89,34 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
       }
     }
   }
+}
+
+void reduce_patch(SourcePatch& patch, int level) {
+  if (patch.level != 0 || level < 1 || level > int(pack::kMaxPatchLevel))
+    throw CookError("reduce_patch: level " + std::to_string(level) + " of a level-" +
+                    std::to_string(patch.level) + " patch");
+  const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels, b = 1 << level;
+  patch.level = level;
+  const int sw = patch.stored_w(), sh = patch.stored_h();
+  std::vector<float> values(size_t(sw) * sh * ch, 0.0f);
+  std::vector<uint8_t> significant(size_t(sw) * sh, 0);
+  for (int sy = 0; sy < sh; ++sy) {
+    for (int sx = 0; sx < sw; ++sx) {
+      const size_t s = size_t(sy) * sw + sx;
+      const int x1 = std::min(w, (sx + 1) * b), y1 = std::min(h, (sy + 1) * b);
+      int n = 0;
+      for (int y = sy * b; y < y1; ++y) {
+        for (int x = sx * b; x < x1; ++x, ++n) {
+          const size_t t = size_t(y) * w + x;
+          for (int c = 0; c < ch; ++c) values[s * ch + c] += patch.values[t * ch + c];
+          significant[s] |= patch.significant[t];
+        }
+      }
+      for (int c = 0; c < ch; ++c) values[s * ch + c] /= float(n);  // n >= 1: the block is in
+    }
+  }
+  patch.values = std::move(values);
+  patch.significant = std::move(significant);
 }
 
 float colour_spread(const SourcePatch& patch) {

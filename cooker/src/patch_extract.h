@@ -21,12 +21,19 @@ struct SourcePatch {
   uint8_t target = 0;  // pack::PatchTarget
   int channels = 1;    // 1 or 3
   Rect dest;           // in the target map
-  // Magnitudes (sign removed, >= 0), dest.w * dest.h * channels, row-major from the top.
+  // Level (pack_format.h, "Magnified patches"): stored at 1/2^level of the target map's
+  // resolution per axis, stored_w() x stored_h() texels that the runtime magnifies into `dest`.
+  int level = 0;
+  // Magnitudes (sign removed, >= 0), stored_w() * stored_h() * channels, row-major from the top.
   std::vector<float> values;
-  // Per texel: 1 where the value (of this patch's sign) is significant; errors are measured there.
+  // Per stored texel: 1 where the value (of this patch's sign) is significant; errors are
+  // measured there.
   std::vector<uint8_t> significant;
   float weight = 1.0f;     // to final-map units at the authored state (a_l for C_l/S_ol, 1 for B)
   float threshold = 0.0f;  // significance threshold in this map's units (half an output step)
+
+  int stored_w() const { return (dest.w + (1 << level) - 1) >> level; }
+  int stored_h() const { return (dest.h + (1 << level) - 1) >> level; }
 };
 
 // Significance rule: a texel is significant for sign s when some channel has s * v > threshold,
@@ -38,6 +45,13 @@ struct SourcePatch {
 void extract_patches(const FloatImage& map, const std::vector<Region>& regions, float threshold,
                      int max_dim, const SourcePatch& prototype, const std::string& what,
                      std::vector<SourcePatch>& out);
+
+// Stores a level-0 patch at `level` (1..pack::kMaxPatchLevel): each stored texel is the mean of
+// its 2^level x 2^level block of the patch's texels (the blocks at the right and bottom edges
+// may be partial), significant where any of them is. The runtime's bilinear magnification
+// (pack_format.h) then gives back a linear ramp exactly inside the patch, and the patch costs
+// 4^level times fewer atlas texels: for smooth light only (a moving light's pane).
+void reduce_patch(SourcePatch& patch, int level);
 
 // The largest max - min over a 3-channel patch's texels (its tint); 0 for other patches.
 float colour_spread(const SourcePatch& patch);

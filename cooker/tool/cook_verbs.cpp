@@ -25,6 +25,7 @@
 #include "lightpatch/cooker/texel_builder.h"
 #include "lightpatch/cooker/tracer.h"
 #include "lightpatch/cooker/unwrap.h"
+#include "lightpatch/pack_format.h"
 #include "limit_options.h"
 #include "preview_image.h"
 #include "verbs.h"
@@ -93,6 +94,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.bake.probes.spacing = args.float_option("--probe-spacing", 0.0f, 1e-3f, 1e6f);
   o.bake.probes.rays = args.int_option("--probe-rays", 0, 1, 65536);
   o.bake.panes = args.int_option("--panes", 0, 1, kMaxPaneOption);
+  o.bake.pane_level = args.int_option("--pane-level", -1, 0, int(pack::kMaxPatchLevel));
   o.quiet = args.flag("--quiet", "-q");
   o.layout.align = layout_align(o.bake);
   o.layout.align_required = o.bake.indirect_scale > 0;

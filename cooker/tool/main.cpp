@@ -66,6 +66,8 @@ constexpr const char* kCookOptionsHelp =
     "  --panes N              panes of the moving lights' bounce light (lights with extras\n"
     "                         \"moving\": true), before splitting those that reach round a\n"
     "                         corner (at most 4N; default 32; docs/moving_lights.md)\n"
+    "  --pane-level L         0-3: the panes' patches at 1/2^L of the indirect map's\n"
+    "                         resolution, magnified by the runtime (default 1)\n"
     "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
     "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
     "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
@@ -234,7 +236,7 @@ const Verb kVerbs[] = {
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
      "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--panes N] "
-     "[--seed N] [--threads N] [--quiet]",
+     "[--pane-level L] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,

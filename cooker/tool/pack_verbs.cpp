@@ -117,7 +117,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["moving_lights"] = moving;
   j["panes"] = {{"count", p.pane_count()}, {"bytes", p.pane_bytes()}};
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
-                                         square = 0, indirect = 0;
+                                         square = 0, indirect = 0, magnified = 0;
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
     const pack::PatchRecord& r = p.patch(i);
     by_kind[p.group(r.group).kind]++;
@@ -126,6 +126,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
     one_channel += r.channel_count == 1 ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
     indirect += r.target == pack::kTargetIndirectMap ? 1 : 0;
+    magnified += pack::patch_level(r.flags) > 0 ? 1 : 0;
   }
   j["groups"] = p.group_count();
   j["patches"] = {{"total", p.patch_count()},
@@ -139,6 +140,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                   {"three_channel", p.patch_count() - one_channel},
                   {"square_encoded", square},
                   {"indirect_map", indirect},
+                  {"magnified", magnified},
                   {"channel_texels", texels}};
   nlohmann::ordered_json atlases = nlohmann::ordered_json::array();
   uint64_t atlas_bytes = 0;
@@ -178,8 +180,12 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["atlas_to_lightmap_ratio"] = double(atlas_bytes) / double(lightmap_bytes);
   // Packing waste: atlas bytes no patch channel covers (unused channels, rounding of sizes).
   uint64_t patch_bytes = 0;
-  for (uint32_t i = 0; i < p.patch_count(); ++i)
-    patch_bytes += uint64_t(p.patch(i).width) * p.patch(i).height * p.patch(i).channel_count;
+  for (uint32_t i = 0; i < p.patch_count(); ++i) {
+    const pack::PatchRecord& r = p.patch(i);
+    const uint32_t level = pack::patch_level(r.flags);
+    patch_bytes += uint64_t(pack::patch_atlas_side(r.width, level)) *
+                   pack::patch_atlas_side(r.height, level) * r.channel_count;
+  }
   j["atlas_patch_bytes"] = patch_bytes;
   j["atlas_waste"] = atlas_bytes ? 1.0 - double(patch_bytes) / double(atlas_bytes) : 0.0;
   // Light probes (pack_format.h, "Light probes").
@@ -298,12 +304,13 @@ int verb_info(Args& args) {
   std::printf("groups         %u\n", pack.view.group_count());
   std::printf(
       "patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
-      "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu)\n",
+      "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu, magnified %llu)\n",
       pack.view.patch_count(), pt["base"].get<unsigned long long>(),
       pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
       pt["pair_correction"].get<unsigned long long>(),
       pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
-      pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>());
+      pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>(),
+      pt["magnified"].get<unsigned long long>());
   std::printf("atlases        %u:", pack.view.atlas_count());
   for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
     std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);

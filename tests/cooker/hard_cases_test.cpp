@@ -81,8 +81,9 @@ void expect_all_finite(const Cooked& c) {
     EXPECT_TRUE(std::isfinite(p.scale) && p.scale > 0.0f) << "patch " << i << " scale " << p.scale;
     const pack::AtlasRecord& a = c.pack.atlas(p.atlas);
     const uint8_t* px = c.pack.atlas_pixels(p.atlas);
-    for (uint32_t y = 0; y < p.height; ++y) {
-      for (uint32_t x = 0; x < p.width; ++x) {
+    const uint32_t level = pack::patch_level(p.flags);
+    for (uint32_t y = 0; y < pack::patch_atlas_side(p.height, level); ++y) {
+      for (uint32_t x = 0; x < pack::patch_atlas_side(p.width, level); ++x) {
         const size_t at = (size_t(p.atlas_y + y) * a.width + p.atlas_x + x) * 4;
         for (uint32_t k = 0; k < p.channel_count; ++k) {
           bad += std::isfinite(patch_decode(p, px[at + p.channel + k])) ? 0 : 1;

@@ -10,6 +10,7 @@
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/group_file.h"
 #include "lightpatch/cooker/io.h"
+#include "lightpatch/pack_format.h"
 
 namespace lightpatch::cooker {
 
@@ -93,6 +94,7 @@ json settings_json(const CookSettings& s) {
           {"probe_spacing", b.probes.spacing},
           {"probe_rays", b.probes.rays},
           {"panes", b.panes},
+          {"pane_level", b.pane_level},
           {"moving_direct", b.moving_direct},
           {"max_triangles", s.import.max_triangles},
           {"max_vertices", s.import.max_vertices},
@@ -158,6 +160,7 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
     throw CookError(file + ": \"probe_spacing\" out of range");
   s.bake.probes.rays = int_field(j, "probe_rays", 0, 1 << 20, file);
   s.bake.panes = int_field(j, "panes", 0, kMaxPaneOption, file);
+  s.bake.pane_level = int_field(j, "pane_level", -1, int(pack::kMaxPatchLevel), file);
   s.bake.moving_direct = field<bool>(j, "moving_direct", file);
   s.import.max_triangles = field<uint64_t>(j, "max_triangles", file);
   s.import.max_vertices = field<uint64_t>(j, "max_vertices", file);

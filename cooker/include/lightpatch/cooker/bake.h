@@ -39,6 +39,9 @@ constexpr int kDefaultPanes = 32;
 // The most BakeOptions::panes may ask for (the refinement may make 4x as many; pack_format.h
 // kMaxPanes).
 constexpr int kMaxPaneOption = 1024;
+// The panes' storage level by default (BakeOptions::pane_level; docs/moving_lights.md, "Pane
+// patches at half the indirect map's resolution", has the measurements it was chosen by).
+constexpr int kDefaultPaneLevel = 1;
 
 struct BakeOptions {
   Quality quality = Quality::kPreview;
@@ -73,6 +76,10 @@ struct BakeOptions {
   // Moving lights (docs/moving_lights.md): panes their bounce light is made of, before the
   // line-of-sight refinement (which may make up to 4x as many); 0 = kDefaultPanes.
   int panes = 0;
+  // The level the panes' patches are stored at on the indirect map (pack_format.h, "Magnified
+  // patches": 1/2^level of its resolution per axis, magnified by the runtime); < 0 =
+  // kDefaultPaneLevel.
+  int pane_level = -1;
   // bake_state: also the moving lights' direct light (for pictures; the runtime's maps hold only
   // their bounce light, the game draws their direct light).
   bool moving_direct = false;

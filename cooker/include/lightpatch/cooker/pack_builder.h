@@ -32,6 +32,9 @@ struct PackOptions {
   // them: those of the groups without a light, then light contributions within the costliest
   // light change and where that takes fewer atlas bytes (pack_builder.cpp, split_for_alpha).
   bool fill_alpha = true;
+  // Moving lights' panes (bounce light only, stored on the indirect map) at this level
+  // (pack_format.h, "Magnified patches"): 0 texel for texel, up to pack::kMaxPatchLevel.
+  int pane_level = 0;
 };
 
 struct ProbeBake;  // probes.h

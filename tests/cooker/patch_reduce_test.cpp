@@ -1,0 +1,108 @@
+// reduce_patch (patch_extract.h): a patch stored at a coarser level for the runtime to magnify
+// (pack_format.h, "Magnified patches").
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "lightpatch/cooker/error.h"
+#include "lightpatch/pack_format.h"
+#include "patch_extract.h"
+
+namespace lightpatch::cooker {
+namespace {
+
+// A w x h patch of a linear ramp per channel, significant except at texel (0, 0).
+SourcePatch ramp(int w, int h, int channels) {
+  SourcePatch p;
+  p.channels = channels;
+  p.dest = Rect{10, 20, w, h};
+  p.values.resize(size_t(w) * h * channels);
+  p.significant.assign(size_t(w) * h, 1);
+  p.significant[0] = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < channels; ++c)
+        p.values[(size_t(y) * w + x) * channels + c] = 1.0f + 0.5f * x + 0.25f * y + float(c);
+  return p;
+}
+
+// The runtime's magnification (pack_format.h), written out here on its own, at destination texel
+// (x, y) of the patch, channel c.
+double magnified(const SourcePatch& p, int x, int y, int c) {
+  const int sw = p.stored_w(), sh = p.stored_h();
+  const double k = double(1 << p.level);
+  const double sx = (x + 0.5) / k - 0.5, sy = (y + 0.5) / k - 0.5;
+  const double fx0 = std::floor(sx), fy0 = std::floor(sy);
+  const double fx = sx - fx0, fy = sy - fy0;
+  auto at = [&](double i, double j) {
+    const int xi = std::clamp(int(i), 0, sw - 1), yj = std::clamp(int(j), 0, sh - 1);
+    return double(p.values[(size_t(yj) * sw + xi) * p.channels + c]);
+  };
+  const double top = at(fx0, fy0) * (1 - fx) + at(fx0 + 1, fy0) * fx;
+  const double bottom = at(fx0, fy0 + 1) * (1 - fx) + at(fx0 + 1, fy0 + 1) * fx;
+  return top * (1 - fy) + bottom * fy;
+}
+
+TEST(PatchReduce, BlockMeansWithPartialEdgeBlocks) {
+  SourcePatch p = ramp(5, 3, 3);
+  const SourcePatch full = p;
+  reduce_patch(p, 1);
+  EXPECT_EQ(p.level, 1);
+  EXPECT_EQ(p.dest.x, 10);  // the destination is unchanged
+  EXPECT_EQ(p.dest.w, 5);
+  ASSERT_EQ(p.stored_w(), 3);
+  ASSERT_EQ(p.stored_h(), 2);
+  ASSERT_EQ(p.values.size(), size_t(3 * 2 * 3));
+  ASSERT_EQ(p.significant.size(), size_t(3 * 2));
+  EXPECT_EQ(pack::patch_atlas_side(5, 1), 3u);  // the format's rule agrees
+  auto v = [&](const SourcePatch& q, int x, int y, int c) {
+    return q.values[(size_t(y) * q.stored_w() + x) * q.channels + c];
+  };
+  for (int c = 0; c < 3; ++c) {
+    // A full block, a block two texels wide and one high, and the one-texel corner block.
+    EXPECT_FLOAT_EQ(
+        v(p, 0, 0, c),
+        (v(full, 0, 0, c) + v(full, 1, 0, c) + v(full, 0, 1, c) + v(full, 1, 1, c)) / 4.0f);
+    EXPECT_FLOAT_EQ(v(p, 1, 1, c), (v(full, 2, 2, c) + v(full, 3, 2, c)) / 2.0f);
+    EXPECT_FLOAT_EQ(v(p, 2, 1, c), v(full, 4, 2, c));
+  }
+  // Significant where any texel of the block is: (0, 0) of the full patch is not, but its block
+  // has three that are.
+  for (uint8_t s : p.significant) EXPECT_EQ(s, 1);
+}
+
+TEST(PatchReduce, MagnificationGivesALinearRampBackWhereBlocksAreWhole) {
+  for (int level = 1; level <= 2; ++level) {
+    SourcePatch p = ramp(16, 12, 1);
+    const SourcePatch full = p;
+    reduce_patch(p, level);
+    const int b = 1 << level;
+    double worst = 0.0, edge = 0.0;
+    for (int y = 0; y < 12; ++y) {
+      for (int x = 0; x < 16; ++x) {
+        const double e = std::fabs(magnified(p, x, y, 0) - full.values[size_t(y) * 16 + x]);
+        // Inside: the texel's sample point lies between stored texel centres on both axes.
+        const bool inside = x >= b / 2 && x < 16 - b / 2 && y >= b / 2 && y < 12 - b / 2;
+        (inside ? worst : edge) = std::max(inside ? worst : edge, e);
+      }
+    }
+    EXPECT_LT(worst, 1e-5) << "level " << level;
+    // At the edges the clamp holds the last block's mean: off by up to (2^level - 1) / 2 texels
+    // of the ramp's slope (0.5 per texel in x), which a nearest-texel magnification would also
+    // be inside.
+    EXPECT_GT(edge, 0.0) << "level " << level;
+    EXPECT_LE(edge, 0.5 * 0.5 * (b - 1) + 0.25 * 0.5 * (b - 1) + 1e-5) << "level " << level;
+  }
+}
+
+TEST(PatchReduce, RefusesALevelOutOfRangeOrTwice) {
+  SourcePatch p = ramp(4, 4, 1);
+  EXPECT_THROW(reduce_patch(p, 0), CookError);
+  EXPECT_THROW(reduce_patch(p, int(pack::kMaxPatchLevel) + 1), CookError);
+  reduce_patch(p, 1);
+  EXPECT_THROW(reduce_patch(p, 1), CookError);
+}
+
+}  // namespace
+}  // namespace lightpatch::cooker
