@@ -161,7 +161,7 @@ TEST_F(Gles, PathsAndTheRoundingProbe) {
 class GlesPaths : public Gles, public ::testing::WithParamInterface<RecomposePath> {};
 
 TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
-  for (uint32_t seed = 1; seed <= 4; ++seed) {
+  for (uint32_t seed = 1; seed <= 6; ++seed) {
     SyntheticOptions o;
     o.seed = seed;
     o.lights = 2 + seed % 3;
@@ -171,10 +171,17 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
       o.max_patch = 6;
       o.patches_per_group = 12;
     }
-    const uint32_t scales[] = {0, 2, 8, 4};  // an indirect map at every scale but on seed 1
+    if (seed >= 5) {  // magnified patches (levels 1 and 2) among level-0 ones
+      o.magnified_probability = 0.5f;
+      o.max_patch = 13;
+      o.patches_per_group = 6;
+    }
+    if (seed == 6) o.atlas_size = 16;  // many atlases: magnified patches on every unit
+    // An indirect map at every scale but on seeds 1 and 6.
+    const uint32_t scales[] = {0, 2, 8, 4, 2, 0};
     o.indirect_scale = scales[seed - 1];
     open(o, GetParam());
-    if (seed == 4) {
+    if (seed == 4 || seed == 6) {
       ASSERT_GT(pack_.atlas_count(), 8u);
     }
     Error error;
@@ -205,8 +212,20 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
       std::vector<double> magnitude;
       wanted(&magnitude);
       const std::vector<double> want(cpu.presented_maps(), cpu.presented_maps() + got.size());
-      EXPECT_LE(worst(got, want, magnitude, ulps, runtime_.stats().error_bound), 1.0)
-          << "seed " << seed << " trial " << trial;
+      const double w = worst(got, want, magnitude, ulps, runtime_.stats().error_bound);
+      EXPECT_LE(w, 1.0) << "seed " << seed << " trial " << trial;
+      if (o.magnified_probability > 0.0f) {  // what the magnified packs show (for the record)
+        double max_diff = 0.0, sum2 = 0.0, ref2 = 0.0;
+        for (size_t i = 0; i < got.size(); ++i) {
+          max_diff = std::max(max_diff, std::fabs(double(got[i]) - want[i]));
+          sum2 += (double(got[i]) - want[i]) * (double(got[i]) - want[i]);
+          ref2 += want[i] * want[i];
+        }
+        std::printf(
+            "%s, magnified seed %u trial %d: max |GLES - CPU| %.3g, relative RMSE %.3g, "
+            "worst / tolerance %.3f\n",
+            path_name(GetParam()), seed, trial, max_diff, std::sqrt(sum2 / ref2), w);
+      }
     }
   }
 }
@@ -220,12 +239,20 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
 class GlesExactPaths : public Gles, public ::testing::WithParamInterface<RecomposePath> {};
 
 TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
-  for (uint32_t scale : {0u, 4u}) {  // without and with an indirect map: L + magnified I
+  // Without and with an indirect map (L + magnified I), then with magnified patches too.
+  const struct {
+    uint32_t scale;
+    float magnified;
+  } configs[] = {{0, 0.0f}, {4, 0.0f}, {4, 0.5f}};
+  for (const auto& config : configs) {
+    const uint32_t scale = config.scale;
+    const char* magnified = config.magnified > 0.0f ? ", magnified patches" : "";
     SyntheticOptions o;
     o.seed = 21;
     o.lights = 4;
     o.objects = 4;
     o.indirect_scale = scale;
+    o.magnified_probability = config.magnified;
     open(o, GetParam());
     Error error;
     SceneState state;
@@ -261,19 +288,21 @@ TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
       ASSERT_EQ(cpu.rebuild(state), Status::kOk);
       const std::vector<float> got = testing::sampled_from(read(), pack_);
       const testing::MapMetrics m = testing::compare_maps(got.data(), cpu.rgb(), got.size());
-      EXPECT_LE(m.relative_rmse, 1e-3) << "state " << step << " scale " << scale;
-      EXPECT_LE(std::fabs(m.median_ratio - 1.0), 5e-4) << "state " << step << " scale " << scale;
+      EXPECT_LE(m.relative_rmse, 1e-3) << "state " << step << " scale " << scale << magnified;
+      EXPECT_LE(std::fabs(m.median_ratio - 1.0), 5e-4)
+          << "state " << step << " scale " << scale << magnified;
       EXPECT_GE(m.min_value, 0.0);
       worst_single.relative_rmse = std::max(worst_single.relative_rmse, m.relative_rmse);
       if (step == 300) {
         std::printf(
-            "%s, indirect scale %u, after 300 states: relative RMSE %.4f %%, median %.6f, 1st "
+            "%s, indirect scale %u%s, after 300 states: relative RMSE %.4f %%, median %.6f, 1st "
             "percentile %.5f\n",
-            path_name(GetParam()), scale, 100.0 * m.relative_rmse, m.median_ratio, m.p1_ratio);
+            path_name(GetParam()), scale, magnified, 100.0 * m.relative_rmse, m.median_ratio,
+            m.p1_ratio);
       }
     }
-    std::printf("%s, indirect scale %u, worst single change: relative RMSE %.4f %%\n",
-                path_name(GetParam()), scale, 100.0 * worst_single.relative_rmse);
+    std::printf("%s, indirect scale %u%s, worst single change: relative RMSE %.4f %%\n",
+                path_name(GetParam()), scale, magnified, 100.0 * worst_single.relative_rmse);
   }
 }
 
@@ -376,7 +405,8 @@ TEST_F(Gles, NoAllocationAndNoGlObjectCreationPerFrame) {
   for (RecomposePath path : {RecomposePath::kGpuFloat, RecomposePath::kCpu}) {
     SyntheticOptions o;
     o.seed = 13;
-    o.indirect_scale = 8;  // both targets' draws and uploads
+    o.indirect_scale = 8;            // both targets' draws and uploads
+    o.magnified_probability = 0.3f;  // and magnified patches' draws
     open(o, path);
     settle(kUnlimited);
     std::mt19937 rng(21);

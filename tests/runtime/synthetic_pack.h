@@ -35,6 +35,10 @@ struct SyntheticOptions {
   // Bounce light that covers the whole room: every contribution group gets one more patch that
   // covers its whole indirect map (or, without one, the whole light map). For cost comparisons.
   bool bounce_covers_map = false;
+  // Magnified patches (pack_format.h, "Magnified patches"): each patch (but a bounce_covers_map
+  // one) is of level 1 or 2 with this probability, its atlas rectangle shelf-packed against its
+  // neighbours' like any other. 0 draws nothing more: packs without are unchanged.
+  float magnified_probability = 0.0f;
   // Edits the header and the patch records (not their count) before the table checksum is
   // computed: corrupt packs that only the record validation can refuse.
   std::function<void(pack::Header&, std::vector<pack::PatchRecord>&)> mutate;
@@ -272,13 +276,19 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
         p.height = uint16_t(integer(1, std::min(o.max_patch, map_h)));
       }
       if (coarse) p.target = kTargetIndirectMap;
-      if (cx + p.width > as) cx = 0, cy += shelf, shelf = 0;
-      if (cy + p.height > as) atlases.emplace_back(), cx = cy = shelf = 0;
+      uint32_t level = 0;
+      if (o.magnified_probability > 0.0f && !(cover && k + 1 == groups[g].patch_count) &&
+          uniform(0, 1) < o.magnified_probability)
+        level = integer(1, 2);
+      const uint32_t aw = patch_atlas_side(p.width, level);
+      const uint32_t ah = patch_atlas_side(p.height, level);
+      if (cx + aw > as) cx = 0, cy += shelf, shelf = 0;
+      if (cy + ah > as) atlases.emplace_back(), cx = cy = shelf = 0;
       p.atlas = uint8_t(atlases.size() - 1);
       p.atlas_x = uint16_t(cx);
       p.atlas_y = uint16_t(cy);
-      cx += p.width;
-      if (p.height > shelf) shelf = p.height;
+      cx += aw;
+      if (ah > shelf) shelf = ah;
       p.dest_x = uint16_t(integer(0, map_w - p.width));
       p.dest_y = uint16_t(integer(0, map_h - p.height));
       p.channel_count = uniform(0, 1) < 0.3f ? 3 : 1;
@@ -289,6 +299,7 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
       // A third of the 1-channel patches draw into one map channel only.
       if (p.channel_count == 1 && uniform(0, 1) < 0.33f)
         p.flags = uint8_t(p.flags | (integer(1, 3) << kFlagDestinationShift));
+      p.flags = uint8_t(p.flags | (level << kFlagLevelShift));
       p.group = uint16_t(g);
       patches.push_back(p);
     }

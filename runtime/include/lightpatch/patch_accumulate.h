@@ -3,6 +3,7 @@
 // reference all draw through it).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -13,12 +14,74 @@
 
 namespace lightpatch {
 
+// One magnified patch (pack_format.h, "Magnified patches"): destination texel (x, y) gets the
+// bilinear interpolation of the decoded values `table` of the patch's own atlas rectangle at
+// s = (x + 0.5) / 2^level - 0.5 (per axis), both taps clamped to the rectangle. s and the weights
+// are exact in float and double (a power-of-two division of small integers). Indices and weights
+// are computed per texel: nothing to allocate.
+template <typename T>
+void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8_t* pixels,
+                         uint32_t atlas_width, const T table[256], const T f[3], uint32_t step,
+                         int destination, T* map, uint32_t map_width) {
+  const uint32_t aw = pack::patch_atlas_side(p.width, level);
+  const uint32_t ah = pack::patch_atlas_side(p.height, level);
+  const T inv = T(1) / T(1u << level);
+  // Tap i of an axis of n texels and its weight: s in [-0.5, n - 0.5), so floor(s) >= -1.
+  struct Tap {
+    uint32_t i0, i1;
+    T t;
+  };
+  auto tap = [inv](uint32_t x, uint32_t n) {
+    const T s = (T(x) + T(0.5)) * inv - T(0.5);
+    const T fl = std::floor(s);
+    const int64_t i = int64_t(fl);
+    const int64_t last = int64_t(n) - 1;
+    return Tap{uint32_t(std::clamp<int64_t>(i, 0, last)),
+               uint32_t(std::clamp<int64_t>(i + 1, 0, last)), s - fl};
+  };
+  // The patch's first channel at atlas-rectangle texel (x, y).
+  auto at = [&](uint32_t x, uint32_t y) {
+    return pixels + ((size_t(p.atlas_y) + y) * atlas_width + p.atlas_x + x) * 4 + p.channel;
+  };
+  // Bilinear interpolation of channel offset k between the four taps.
+  auto lerp2 = [table](const uint8_t* a, const uint8_t* b, const uint8_t* c, const uint8_t* d,
+                       uint32_t k, T tx, T ty) {
+    const T top = table[a[k]] + tx * (table[b[k]] - table[a[k]]);
+    const T bottom = table[c[k]] + tx * (table[d[k]] - table[c[k]]);
+    return top + ty * (bottom - top);
+  };
+  for (uint32_t y = 0; y < p.height; ++y) {
+    const Tap ty = tap(y, ah);
+    T* dst = map + ((size_t(p.dest_y) + y) * map_width + p.dest_x) * 3;
+    for (uint32_t x = 0; x < p.width; ++x, dst += 3) {
+      const Tap tx = tap(x, aw);
+      const uint8_t* a = at(tx.i0, ty.i0);
+      const uint8_t* b = at(tx.i1, ty.i0);
+      const uint8_t* c = at(tx.i0, ty.i1);
+      const uint8_t* d = at(tx.i1, ty.i1);
+      const T v0 = lerp2(a, b, c, d, 0, tx.t, ty.t);
+      if (destination >= 0) {
+        dst[destination] += f[destination] * v0;
+      } else if (step == 0) {  // grey: one value for the three channels
+        dst[0] += f[0] * v0;
+        dst[1] += f[1] * v0;
+        dst[2] += f[2] * v0;
+      } else {
+        dst[0] += f[0] * v0;
+        dst[1] += f[1] * lerp2(a, b, c, d, 1, tx.t, ty.t);
+        dst[2] += f[2] * lerp2(a, b, c, d, 2, tx.t, ty.t);
+      }
+    }
+  }
+}
+
 // Adds factor * (signed decoded value) of every texel of patches [first, first + count) to
 // `maps`: the pack's map set (pack_view.h: the light map, then the indirect map if the pack has
 // one; RGB, 3 values per texel, row 0 = top), each patch into its own target. With `absolute`,
 // adds |factor * value| (magnitude bounds). A grey patch (one channel) adds its value to all three
 // channels, or to its one destination channel (pack::patch_destination). The patches must be
-// valid indices of a validated pack.
+// valid indices of a validated pack. A magnified patch (level > 0) is interpolated from its
+// atlas rectangle; with `absolute`, from the absolute values (a bound of the magnitude).
 template <typename T>
 void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T factor[3], T* maps,
                  bool absolute = false) {
@@ -39,6 +102,11 @@ void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T f
     for (int c = 0; c < 3; ++c) f[c] = absolute ? T(std::fabs(factor[c])) : factor[c];
     const uint32_t step = p.channel_count == 3 ? 1 : 0;
     const int destination = pack::patch_destination(p.flags);
+    const uint32_t level = pack::patch_level(p.flags);
+    if (level > 0) {
+      add_magnified_patch(p, level, pixels, aw, table, f, step, destination, map, w);
+      continue;
+    }
     if (destination >= 0) {
       const T fd = f[destination];
       for (uint32_t y = 0; y < p.height; ++y) {

@@ -828,10 +828,16 @@ Status Validator::run(Parsed* out) {
     if (p.width == 0 || p.height == 0)
       return fail(Status::kCorrupt, "patch %u: empty rectangle", i);
     const AtlasRecord& a = atlases[p.atlas];
-    if (uint32_t(p.atlas_x) + p.width > a.width || uint32_t(p.atlas_y) + p.height > a.height) {
+    // A magnified patch's atlas rectangle is smaller than its destination (the level is 2 bits,
+    // 0..kMaxPatchLevel, and a side is 16-bit: no overflow in 32 bits).
+    const uint32_t level = patch_level(p.flags);
+    const uint32_t aw = patch_atlas_side(p.width, level), ah = patch_atlas_side(p.height, level);
+    if (uint32_t(p.atlas_x) + aw > a.width || uint32_t(p.atlas_y) + ah > a.height) {
       return fail(Status::kCorrupt,
-                  "patch %u: atlas rectangle %u+%u x %u+%u exceeds atlas %u (%ux%u)", i, p.atlas_x,
-                  p.width, p.atlas_y, p.height, p.atlas, a.width, a.height);
+                  "patch %u: atlas rectangle %u+%u x %u+%u (level %u, destination %ux%u) exceeds "
+                  "atlas %u (%ux%u)",
+                  i, p.atlas_x, aw, p.atlas_y, ah, level, p.width, p.height, p.atlas, a.width,
+                  a.height);
     }
     if (p.target != kTargetLightMap && p.target != kTargetIndirectMap) {
       return fail(Status::kCorrupt, "patch %u: unknown target %u", i, p.target);
@@ -872,7 +878,7 @@ Status Validator::run(Parsed* out) {
     if (!std::isfinite(p.scale) || !(p.scale > 0.0f)) {
       return fail(Status::kCorrupt, "patch %u: scale is not finite and > 0", i);
     }
-    if ((p.flags & ~uint32_t(kFlagNegative | kFlagDestinationMask)) != 0) {
+    if ((p.flags & ~uint32_t(kFlagNegative | kFlagDestinationMask | kFlagLevelMask)) != 0) {
       return fail(Status::kCorrupt, "patch %u: unknown flags %02x", i, p.flags);
     }
     if (patch_destination(p.flags) >= 0 && p.channel_count != 1) {

@@ -19,7 +19,8 @@ namespace {
 
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
 constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
-constexpr uint32_t kFloatsPerVertex = 9;
+// dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4, magnified 1.
+constexpr uint32_t kFloatsPerVertex = 14;
 constexpr uint32_t kVertexBytes = kFloatsPerVertex * sizeof(float);
 // The scale is chosen so that the authored state's bound stays below this (16x headroom below
 // the largest half float).
@@ -441,13 +442,23 @@ Status Runtime::create_buffers(Error* error) {
     return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
   }
   for (uint32_t q = 0; q < quads; ++q) {
-    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit;
+    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4], magnified;
     if (q < pack_.patch_count()) {
       const pack::PatchRecord& p = pack_.patch(q);
       // The destination and the atlas rectangle are given separately: a patch drawn magnified
       // from a smaller atlas rectangle needs only other atlas corners here.
       dx0 = p.dest_x, dy0 = p.dest_y, dx1 = dx0 + p.width, dy1 = dy0 + p.height;
-      ax0 = p.atlas_x, ay0 = p.atlas_y, ax1 = ax0 + p.width, ay1 = ay0 + p.height;
+      // A level-L patch's atlas corners span width / 2^L (exact in float), so that v_atlas at
+      // destination texel centre x is atlas_x + (x + 0.5) / 2^L (pack_format.h, "Magnified
+      // patches"); the shader clamps its taps to the atlas rectangle `rect` (inclusive texels).
+      const uint32_t level = pack::patch_level(p.flags);
+      const float inv = 1.0f / float(1u << level);
+      ax0 = p.atlas_x, ay0 = p.atlas_y;
+      ax1 = ax0 + float(p.width) * inv, ay1 = ay0 + float(p.height) * inv;
+      rect[0] = ax0, rect[1] = ay0;
+      rect[2] = float(p.atlas_x + pack::patch_atlas_side(p.width, level) - 1);
+      rect[3] = float(p.atlas_y + pack::patch_atlas_side(p.height, level) - 1);
+      magnified = level > 0 ? 1.0f : 0.0f;
       params[0] = p.scale * patch_sign(pack_.group(p.group).kind, p.flags);
       params[1] = p.channel;
       const int destination = pack::patch_destination(p.flags);
@@ -462,6 +473,8 @@ Status Runtime::create_buffers(Error* error) {
       ax0 = ay0 = 0.0f, ax1 = float(a0.width), ay1 = float(a0.height);
       params[0] = 1.0f, params[1] = 0.0f, params[2] = 3.0f, params[3] = 0.0f;
       unit = 0.0f;
+      rect[0] = rect[1] = 0.0f, rect[2] = ax1 - 1.0f, rect[3] = ay1 - 1.0f;
+      magnified = 0.0f;
     }
     const float corners[4][4] = {
         {dx0, dy0, ax0, ay0}, {dx1, dy0, ax1, ay0}, {dx0, dy1, ax0, ay1}, {dx1, dy1, ax1, ay1}};
@@ -470,6 +483,8 @@ Status Runtime::create_buffers(Error* error) {
       std::memcpy(v, corners[c], sizeof corners[c]);
       std::memcpy(v + 4, params, sizeof params);
       v[8] = unit;
+      std::memcpy(v + 9, rect, sizeof rect);
+      v[13] = magnified;
     }
     const uint32_t b = q * 4;
     const uint32_t quad[6] = {b, b + 1, b + 2, b + 2, b + 1, b + 3};
@@ -496,6 +511,12 @@ Status Runtime::create_buffers(Error* error) {
   glEnableVertexAttribArray(3);
   glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, kVertexBytes,
                         reinterpret_cast<const void*>(8 * sizeof(float)));
+  glEnableVertexAttribArray(4);
+  glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, kVertexBytes,
+                        reinterpret_cast<const void*>(9 * sizeof(float)));
+  glEnableVertexAttribArray(5);
+  glVertexAttribPointer(5, 1, GL_FLOAT, GL_FALSE, kVertexBytes,
+                        reinterpret_cast<const void*>(13 * sizeof(float)));
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   memory_.vertex_buffer = vbytes;
