@@ -49,8 +49,9 @@ TEST(MagnifiedPatches, TheAtlasRectangleIsCheckedWithTheAtlasSides) {
   };
   ASSERT_EQ(open_message(make_synthetic_pack(small_atlas_options())), "");
   // 31 destination texels from 16 atlas texels: fits the 16-texel atlas at x = 0.
+  const testing::SyntheticPack wide = with_patch0(1, 0, 31);  // outlives the view
   PackView view;
-  EXPECT_EQ(open_message(with_patch0(1, 0, 31), &view), "");
+  EXPECT_EQ(open_message(wide, &view), "");
   EXPECT_EQ(pack::patch_level(view.patch(0).flags), 1u);
   EXPECT_EQ(open_message(with_patch0(2, 0, 48)), "");  // 12 atlas texels
   // The same at x = 1 (17 > 16), or at level 0, is refused, naming the patch.
@@ -176,8 +177,9 @@ TEST(MagnifiedPatches, TheSyntheticPackHasMagnifiedPatchesOfEveryKind) {
 }
 
 // add_patches of each magnified patch alone equals the rule to float rounding (in float and in
-// double: the decoded values are floats, as for level 0), and so does its magnitude bound (`absolute`) on the absolute values. The
-// controls: the data tells the rule from nearest-neighbour magnification and from unclamped taps.
+// double: the decoded values are floats, as for level 0), and so does its magnitude bound
+// (`absolute`) on the absolute values. The controls: the data tells the rule from nearest-neighbour
+// magnification and from unclamped taps.
 TEST(MagnifiedPatches, AddPatchesFollowsTheRule) {
   for (uint32_t seed : {3u, 4u}) {
     const SyntheticPack bytes = make_synthetic_pack(magnified_options(seed));
