@@ -1,8 +1,6 @@
 #version 300 es
 // Decodes a patch texel (pack_format.h: x = q/255, linear or squared, times scale and sign) and
-// outputs it times the draw's factor; the target adds it with blending (ONE, ONE). A magnified
-// patch (pack_format.h, "Magnified patches") interpolates the decoded values of four texels of
-// its own atlas rectangle.
+// outputs it times the draw's factor; the target adds it with blending (ONE, ONE).
 precision highp float;
 precision highp int;
 
@@ -16,49 +14,23 @@ flat in vec4 v_mask_b;
 flat in float v_scale;
 flat in int v_square;
 flat in int v_unit;
-flat in vec4 v_rect;
-flat in int v_magnified;
 
 out vec4 o_color;
 
-// Atlas texel t of the patch's unit. texelFetch needs no derivatives, so the branch on the unit
-// is fine (sampler arrays only take constant indices in GLSL ES 3.00).
-vec4 fetch(ivec2 t) {
-  if (v_unit == 0) return texelFetch(u_atlas[0], t, 0);
-  else if (v_unit == 1) return texelFetch(u_atlas[1], t, 0);
-  else if (v_unit == 2) return texelFetch(u_atlas[2], t, 0);
-  else if (v_unit == 3) return texelFetch(u_atlas[3], t, 0);
-  else if (v_unit == 4) return texelFetch(u_atlas[4], t, 0);
-  else if (v_unit == 5) return texelFetch(u_atlas[5], t, 0);
-  else if (v_unit == 6) return texelFetch(u_atlas[6], t, 0);
-  else return texelFetch(u_atlas[7], t, 0);
-}
-
-// The decoded value of atlas texel t, before scale and sign.
-vec3 decode(ivec2 t) {
-  vec4 q = fetch(t);
+void main() {
+  // v_atlas is at texel centres (n + 0.5); texelFetch needs no derivatives, so the branch on the
+  // unit is fine (sampler arrays only take constant indices in GLSL ES 3.00).
+  ivec2 t = ivec2(floor(v_atlas));
+  vec4 q;
+  if (v_unit == 0) q = texelFetch(u_atlas[0], t, 0);
+  else if (v_unit == 1) q = texelFetch(u_atlas[1], t, 0);
+  else if (v_unit == 2) q = texelFetch(u_atlas[2], t, 0);
+  else if (v_unit == 3) q = texelFetch(u_atlas[3], t, 0);
+  else if (v_unit == 4) q = texelFetch(u_atlas[4], t, 0);
+  else if (v_unit == 5) q = texelFetch(u_atlas[5], t, 0);
+  else if (v_unit == 6) q = texelFetch(u_atlas[6], t, 0);
+  else q = texelFetch(u_atlas[7], t, 0);
   vec3 x = vec3(dot(q, v_mask_r), dot(q, v_mask_g), dot(q, v_mask_b));
   if (v_square == 1) x *= x;
-  return x;
-}
-
-void main() {
-  vec3 x;
-  if (v_magnified == 0) {
-    // v_atlas is at texel centres (n + 0.5).
-    x = decode(ivec2(floor(v_atlas)));
-  } else {
-    // v_atlas = atlas corner + (destination texel + 0.5) / 2^L: taps i and i + 1 around
-    // v_atlas - 0.5, each clamped to the patch's own rectangle (never a neighbour's texel).
-    vec2 s = v_atlas - 0.5;
-    vec2 i = floor(s);
-    vec2 f = s - i;
-    ivec2 lo = ivec2(v_rect.xy), hi = ivec2(v_rect.zw);
-    ivec2 t0 = clamp(ivec2(i), lo, hi);
-    ivec2 t1 = clamp(ivec2(i) + 1, lo, hi);
-    vec3 top = mix(decode(t0), decode(ivec2(t1.x, t0.y)), f.x);
-    vec3 bottom = mix(decode(ivec2(t0.x, t1.y)), decode(t1), f.x);
-    x = mix(top, bottom, f.y);
-  }
   o_color = vec4(x * (v_scale * u_factor), 0.0);
 }

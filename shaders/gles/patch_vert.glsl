@@ -1,6 +1,5 @@
 #version 300 es
-// One light patch's quad: copies an atlas rectangle to the same-size rectangle of the target, or
-// magnifies a level-L patch's smaller one (pack_format.h, "Magnified patches").
+// One light patch's quad: copies an atlas rectangle to the same-size rectangle of the target.
 // Positions and atlas coordinates are in texels, row 0 = top (texture row 0); no flip anywhere.
 precision highp float;
 precision highp int;
@@ -12,10 +11,6 @@ layout(location = 1) in vec2 a_atlas;   // atlas texel corner
 // (pack_format.h: kFlagDestinationMask), w: encoding (0 linear, 1 square)
 layout(location = 2) in vec4 a_patch;
 layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0..7)
-// The patch's atlas rectangle, inclusive texels: x0, y0, x1 - 1, y1 - 1 (a magnified patch's
-// bilinear taps are clamped to it).
-layout(location = 4) in vec4 a_rect;
-layout(location = 5) in float a_magnified;  // 1: level > 0 (bilinear), 0: one texel per texel
 
 uniform vec2 u_target_size;
 
@@ -26,8 +21,6 @@ flat out vec4 v_mask_b;
 flat out float v_scale;
 flat out int v_square;
 flat out int v_unit;
-flat out vec4 v_rect;
-flat out int v_magnified;
 
 vec4 channel_mask(float c) { return vec4(equal(vec4(c), vec4(0.0, 1.0, 2.0, 3.0))); }
 
@@ -48,7 +41,5 @@ void main() {
   v_scale = a_patch.x;
   v_square = a_patch.w > 0.5 ? 1 : 0;
   v_unit = int(a_unit + 0.5);
-  v_rect = a_rect;
-  v_magnified = a_magnified > 0.5 ? 1 : 0;
   gl_Position = vec4(a_dest / u_target_size * 2.0 - 1.0, 0.0, 1.0);
 }

@@ -262,9 +262,10 @@ class Runtime {
   uint32_t indirect_map_ = 0, indirect_accumulator_ = 0;
   uint32_t indirect_map_fbo_ = 0, indirect_accumulator_fbo_ = 0;
   uint32_t vbo_ = 0, ibo_ = 0, vao_ = 0;
-  uint32_t patch_program_ = 0, present_program_ = 0;
-  int32_t factor_location_ = -1, present_scale_location_ = -1;
-  int32_t patch_size_location_ = -1, present_size_location_ = -1;  // u_target_size
+  // Level-0 patches, magnified patches (pack_format.h, "Magnified patches"), present steps.
+  uint32_t patch_program_ = 0, magnified_program_ = 0, present_program_ = 0;
+  int32_t factor_location_[2] = {-1, -1}, present_scale_location_ = -1;  // [0] patch, [1] magnified
+  int32_t patch_size_location_[2] = {-1, -1}, present_size_location_ = -1;  // u_target_size
   // Per patch: end of the run of following patches whose atlases share a batch of 8 texture
   // units (one draw call per run; with <= 8 atlases every group is one run).
   uint32_t* run_end_ = nullptr;

@@ -19,8 +19,8 @@ namespace {
 
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
 constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
-// dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4, magnified 1.
-constexpr uint32_t kFloatsPerVertex = 14;
+// dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4 (magnified patches only).
+constexpr uint32_t kFloatsPerVertex = 13;
 constexpr uint32_t kVertexBytes = kFloatsPerVertex * sizeof(float);
 // The scale is chosen so that the authored state's bound stays below this (16x headroom below
 // the largest half float).
@@ -156,11 +156,19 @@ class GlSink final : public DrawSink {
     set_mode(kDraw, r_.pack_.patch(first).target);
     // A half-float accumulator holds the presented scale already (runtime.h).
     const float s = r_.path_ == RecomposePath::kGpuHalf ? r_.inverse_scale_ : 1.0f;
-    glUniform3f(r_.factor_location_, factor[0] * s, factor[1] * s, factor[2] * s);
+    const float f[3] = {factor[0] * s, factor[1] * s, factor[2] * s};
+    bool factor_set[2] = {false, false};
     const uint32_t end = first + count;
     while (first < end) {
       uint32_t run = r_.run_end_[first];
       if (run > end) run = end;
+      // A run is all magnified or all level 0 (Runtime::open): one program for it.
+      const int k = pack::patch_level(r_.pack_.patch(first).flags) > 0 ? 1 : 0;
+      use_patch_program(k);
+      if (!factor_set[k]) {
+        glUniform3f(r_.factor_location_[k], f[0], f[1], f[2]);
+        factor_set[k] = true;
+      }
       const uint32_t batch = r_.pack_.patch(first).atlas / kUnits;
       if (int(batch) != batch_) {
         for (uint32_t u = 0; u < kUnits; ++u) {
@@ -190,6 +198,19 @@ class GlSink final : public DrawSink {
 
  private:
   enum Mode { kNone, kDraw, kPresent };
+  // Patch program k (0: level-0 patches, 1: magnified ones), its u_target_size the current
+  // target's.
+  void use_patch_program(int k) {
+    if (program_ != k) {
+      glUseProgram(k ? r_.magnified_program_ : r_.patch_program_);
+      program_ = k;
+    }
+    if (sized_[k] != target_) {
+      glUniform2f(r_.patch_size_location_[k], float(r_.pack_.map_width(target_)),
+                  float(r_.pack_.map_height(target_)));
+      sized_[k] = target_;
+    }
+  }
   static void draw_quads(uint32_t first, uint32_t count) {
     glDrawElements(GL_TRIANGLES, GLsizei(count * 6), GL_UNSIGNED_INT,
                    reinterpret_cast<const void*>(uintptr_t(first) * 6 * sizeof(uint32_t)));
@@ -204,28 +225,34 @@ class GlSink final : public DrawSink {
       }
       glBindFramebuffer(GL_FRAMEBUFFER,
                         indirect ? r_.indirect_accumulator_fbo_ : r_.accumulator_fbo_);
-      glUseProgram(r_.patch_program_);
       glEnable(GL_BLEND);
     } else {
       glBindFramebuffer(GL_FRAMEBUFFER, indirect ? r_.indirect_map_fbo_ : r_.light_map_fbo_);
       glUseProgram(r_.present_program_);
+      program_ = -1;
       glDisable(GL_BLEND);
       glActiveTexture(GL_TEXTURE0 + kAccumulatorUnit);
       glBindTexture(GL_TEXTURE_2D, indirect ? r_.indirect_accumulator_ : r_.accumulator_);
     }
-    // Each target is drawn in its own texels: viewport and the program's target size.
+    // Each target is drawn in its own texels: viewport and the program's target size (the patch
+    // programs' when they are next used, use_patch_program).
     const uint32_t w = r_.pack_.map_width(target), h = r_.pack_.map_height(target);
     glViewport(0, 0, GLsizei(w), GLsizei(h));
-    glUniform2f(m == kDraw ? r_.patch_size_location_ : r_.present_size_location_, float(w),
-                float(h));
     mode_ = m;
     target_ = target;
+    if (m == kDraw) {
+      use_patch_program(0);
+    } else {
+      glUniform2f(r_.present_size_location_, float(w), float(h));
+    }
   }
 
   Runtime& r_;
   Mode mode_ = kNone;
   uint8_t target_ = pack::kTargetLightMap;
   int batch_ = -1;
+  int program_ = -1;                 // the patch program in use (use_patch_program), or -1
+  uint8_t sized_[2] = {0xFF, 0xFF};  // the target each patch program's size is set for
 };
 
 Runtime::~Runtime() {
@@ -273,9 +300,11 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   // Runs of patches within one group whose atlases share a batch of kUnits units.
   for (uint32_t p = pack.patch_count(); p-- > 0;) {
     const pack::PatchRecord& pr = pack.patch(p);
-    const bool joins = p + 1 < pack.patch_count() && pack.patch(p + 1).group == pr.group &&
-                       pack.patch(p + 1).target == pr.target &&
-                       pack.patch(p + 1).atlas / kUnits == pr.atlas / kUnits;
+    const bool joins =
+        p + 1 < pack.patch_count() && pack.patch(p + 1).group == pr.group &&
+        pack.patch(p + 1).target == pr.target &&
+        pack.patch(p + 1).atlas / kUnits == pr.atlas / kUnits &&
+        (pack::patch_level(pack.patch(p + 1).flags) > 0) == (pack::patch_level(pr.flags) > 0);
     run_end_[p] = joins ? run_end_[p + 1] : p + 1;
   }
   open_ = true;
@@ -404,18 +433,23 @@ Status Runtime::create_programs(Error* error) {
   const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
   patch_program_ = link(shaders::patch_vert, shaders::patch_frag, error);
   if (!patch_program_) return Status::kGlError;
+  magnified_program_ = link(shaders::patch_magnified_vert, shaders::patch_magnified_frag, error);
+  if (!magnified_program_) return Status::kGlError;
   present_program_ = link(shaders::present_vert, shaders::present_frag, error);
   if (!present_program_) return Status::kGlError;
-  factor_location_ = glGetUniformLocation(patch_program_, "u_factor");
-  patch_size_location_ = glGetUniformLocation(patch_program_, "u_target_size");
   present_size_location_ = glGetUniformLocation(present_program_, "u_target_size");
-  glUseProgram(patch_program_);
-  for (uint32_t u = 0; u < kUnits; ++u) {
-    char name[16];
-    std::snprintf(name, sizeof name, "u_atlas[%u]", u);
-    glUniform1i(glGetUniformLocation(patch_program_, name), GLint(u));
+  const uint32_t patch_programs[2] = {patch_program_, magnified_program_};
+  for (int k = 0; k < 2; ++k) {
+    factor_location_[k] = glGetUniformLocation(patch_programs[k], "u_factor");
+    patch_size_location_[k] = glGetUniformLocation(patch_programs[k], "u_target_size");
+    glUseProgram(patch_programs[k]);
+    for (uint32_t u = 0; u < kUnits; ++u) {
+      char name[16];
+      std::snprintf(name, sizeof name, "u_atlas[%u]", u);
+      glUniform1i(glGetUniformLocation(patch_programs[k], name), GLint(u));
+    }
+    glUniform2f(patch_size_location_[k], float(w), float(h));
   }
-  glUniform2f(patch_size_location_, float(w), float(h));
   glUseProgram(present_program_);
   glUniform1i(glGetUniformLocation(present_program_, "u_accumulator"), GLint(kAccumulatorUnit));
   glUniform2f(present_size_location_, float(w), float(h));
@@ -442,7 +476,7 @@ Status Runtime::create_buffers(Error* error) {
     return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
   }
   for (uint32_t q = 0; q < quads; ++q) {
-    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4], magnified;
+    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4];
     if (q < pack_.patch_count()) {
       const pack::PatchRecord& p = pack_.patch(q);
       // The destination and the atlas rectangle are given separately: a patch drawn magnified
@@ -458,7 +492,6 @@ Status Runtime::create_buffers(Error* error) {
       rect[0] = ax0, rect[1] = ay0;
       rect[2] = float(p.atlas_x + pack::patch_atlas_side(p.width, level) - 1);
       rect[3] = float(p.atlas_y + pack::patch_atlas_side(p.height, level) - 1);
-      magnified = level > 0 ? 1.0f : 0.0f;
       params[0] = p.scale * patch_sign(pack_.group(p.group).kind, p.flags);
       params[1] = p.channel;
       const int destination = pack::patch_destination(p.flags);
@@ -474,7 +507,6 @@ Status Runtime::create_buffers(Error* error) {
       params[0] = 1.0f, params[1] = 0.0f, params[2] = 3.0f, params[3] = 0.0f;
       unit = 0.0f;
       rect[0] = rect[1] = 0.0f, rect[2] = ax1 - 1.0f, rect[3] = ay1 - 1.0f;
-      magnified = 0.0f;
     }
     const float corners[4][4] = {
         {dx0, dy0, ax0, ay0}, {dx1, dy0, ax1, ay0}, {dx0, dy1, ax0, ay1}, {dx1, dy1, ax1, ay1}};
@@ -484,7 +516,6 @@ Status Runtime::create_buffers(Error* error) {
       std::memcpy(v + 4, params, sizeof params);
       v[8] = unit;
       std::memcpy(v + 9, rect, sizeof rect);
-      v[13] = magnified;
     }
     const uint32_t b = q * 4;
     const uint32_t quad[6] = {b, b + 1, b + 2, b + 2, b + 1, b + 3};
@@ -514,9 +545,6 @@ Status Runtime::create_buffers(Error* error) {
   glEnableVertexAttribArray(4);
   glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, kVertexBytes,
                         reinterpret_cast<const void*>(9 * sizeof(float)));
-  glEnableVertexAttribArray(5);
-  glVertexAttribPointer(5, 1, GL_FLOAT, GL_FALSE, kVertexBytes,
-                        reinterpret_cast<const void*>(13 * sizeof(float)));
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   memory_.vertex_buffer = vbytes;
@@ -578,6 +606,7 @@ void Runtime::delete_gl() {
   if (ibo_) glDeleteBuffers(1, &ibo_);
   if (vao_) glDeleteVertexArrays(1, &vao_);
   if (patch_program_) glDeleteProgram(patch_program_);
+  if (magnified_program_) glDeleteProgram(magnified_program_);
   if (present_program_) glDeleteProgram(present_program_);
   forget_gl();
 }
@@ -586,7 +615,7 @@ void Runtime::forget_gl() {
   if (atlas_textures_) std::memset(atlas_textures_, 0, sizeof(uint32_t) * pack_.atlas_count());
   light_map_ = accumulator_ = indirect_map_ = indirect_accumulator_ = 0;
   light_map_fbo_ = accumulator_fbo_ = indirect_map_fbo_ = indirect_accumulator_fbo_ = 0;
-  vbo_ = ibo_ = vao_ = patch_program_ = present_program_ = 0;
+  vbo_ = ibo_ = vao_ = patch_program_ = magnified_program_ = present_program_ = 0;
 }
 
 void Runtime::close() {
@@ -855,11 +884,11 @@ Status Runtime::draw_fill_floor(uint64_t texels, Error* error) {
   set_draw_state();
   glEnable(GL_BLEND);
   glUseProgram(patch_program_);
-  glUniform2f(patch_size_location_, float(width()), float(height()));
+  glUniform2f(patch_size_location_[0], float(width()), float(height()));
   glBindFramebuffer(GL_FRAMEBUFFER, accumulator_fbo_);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, atlas_textures_[0]);
-  glUniform3f(factor_location_, 0.0f, 0.0f, 0.0f);
+  glUniform3f(factor_location_[0], 0.0f, 0.0f, 0.0f);
   const void* quad =
       reinterpret_cast<const void*>(uintptr_t(pack_.patch_count()) * 6 * sizeof(uint32_t));
   for (uint64_t done = 0; done < texels; done += full) {

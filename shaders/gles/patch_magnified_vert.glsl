@@ -1,0 +1,52 @@
+#version 300 es
+// A magnified light patch's quad (pack_format.h, "Magnified patches"): a level-L patch's atlas
+// corners span width / 2^L, so v_atlas at a destination texel centre x is atlas_x + (x + 0.5) /
+// 2^L. Level-0 patches are drawn by patch_vert / patch_frag: this program's four taps would cost
+// them twice the time on llvmpipe, which runs both sides of a branch. Positions and atlas
+// coordinates are in texels, row 0 = top (texture row 0); no flip anywhere.
+precision highp float;
+precision highp int;
+
+layout(location = 0) in vec2 a_dest;    // target texel corner
+layout(location = 1) in vec2 a_atlas;   // atlas texel corner
+// As patch_vert.glsl: x: scale * sign, y: first channel, z: channel count or 4 + d for one map
+// channel d, w: encoding (0 linear, 1 square)
+layout(location = 2) in vec4 a_patch;
+layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0..7)
+// The patch's atlas rectangle, inclusive texels: x0, y0, x1 - 1, y1 - 1 (the bilinear taps are
+// clamped to it: a patch never reads a neighbour's texels).
+layout(location = 4) in vec4 a_rect;
+
+uniform vec2 u_target_size;
+
+out vec2 v_atlas;
+flat out vec4 v_mask_r;
+flat out vec4 v_mask_g;
+flat out vec4 v_mask_b;
+flat out float v_scale;
+flat out int v_square;
+flat out int v_unit;
+flat out vec4 v_rect;
+
+vec4 channel_mask(float c) { return vec4(equal(vec4(c), vec4(0.0, 1.0, 2.0, 3.0))); }
+
+void main() {
+  v_atlas = a_atlas;
+  if (a_patch.z > 3.5) {  // one map channel: the others get a zero mask
+    vec4 m = channel_mask(a_patch.y);
+    float d = a_patch.z - 4.0;
+    v_mask_r = d < 0.5 ? m : vec4(0.0);
+    v_mask_g = d > 0.5 && d < 1.5 ? m : vec4(0.0);
+    v_mask_b = d > 1.5 ? m : vec4(0.0);
+  } else {
+    float step = a_patch.z > 1.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
+    v_mask_r = channel_mask(a_patch.y);
+    v_mask_g = channel_mask(a_patch.y + step);
+    v_mask_b = channel_mask(a_patch.y + 2.0 * step);
+  }
+  v_scale = a_patch.x;
+  v_square = a_patch.w > 0.5 ? 1 : 0;
+  v_unit = int(a_unit + 0.5);
+  v_rect = a_rect;
+  gl_Position = vec4(a_dest / u_target_size * 2.0 - 1.0, 0.0, 1.0);
+}
