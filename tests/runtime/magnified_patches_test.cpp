@@ -266,5 +266,17 @@ TEST(MagnifiedPatches, AMagnifiedPatchNeverReadsItsAtlasNeighbours) {
   EXPECT_GT(unclamped_gap, 0.05) << "no patch's unclamped taps reach a neighbour";
 }
 
+// Golden values of magnified.lpk (format version 5 with patches at levels 1 and 2; a pack_load
+// fuzz seed too: tests/fuzz/corpus/pack_load/).
+constexpr uint64_t kMagnifiedSize = 36608;
+constexpr uint32_t kMagnifiedCrc = 0x53b0f8f0u;
+
+TEST(MagnifiedPatches, GoldenBytesAndEveryTruncationRefused) {
+  const SyntheticPack built = make_synthetic_pack(magnified_options(3));
+  const uint8_t* b = reinterpret_cast<const uint8_t*>(built.data());
+  testing::expect_committed_pack(b, built.size, "magnified.lpk", kMagnifiedSize, kMagnifiedCrc);
+  testing::expect_truncations_refused(built.data(), built.size);
+}
+
 }  // namespace
 }  // namespace lightpatch
