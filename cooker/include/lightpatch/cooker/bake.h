@@ -33,14 +33,13 @@ enum class Integrator { kGather, kReference };
 const char* integrator_name(Integrator i);
 Integrator parse_integrator(const std::string& name);  // throws CookError
 
-// Panes of the moving lights by default (BakeOptions::panes; docs/moving_lights.md has the table
-// this was chosen by).
-constexpr int kDefaultPanes = 32;
+// Panes of the moving lights by default (BakeOptions::panes; docs/moving_lights.md, "Pane patches
+// at a coarser level", has the table this and kDefaultPaneLevel were chosen by).
+constexpr int kDefaultPanes = 64;
 // The most BakeOptions::panes may ask for (the refinement may make 4x as many; pack_format.h
 // kMaxPanes).
 constexpr int kMaxPaneOption = 1024;
-// The panes' storage level by default (BakeOptions::pane_level; docs/moving_lights.md, "Pane
-// patches at half the indirect map's resolution", has the measurements it was chosen by).
+// The panes' storage level by default (BakeOptions::pane_level).
 constexpr int kDefaultPaneLevel = 1;
 
 struct BakeOptions {
