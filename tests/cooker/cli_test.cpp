@@ -155,7 +155,8 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
   for (const char* option :
        {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect", "--area-samples",
         "--texel-samples", "--seed", "--integrator", "--gather-rays", "--indirect-scale",
-        "--denoise", "--threads", "--report", "--quiet", "--no-plan", "--measure-plan"}) {
+        "--denoise", "--threads", "--report", "--quiet", "--no-plan", "--measure-plan", "--panes",
+        "--pane-level"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
   const ToolRun bake_state = expect_success({"bake-state", "--help"});
@@ -254,6 +255,8 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
   EXPECT_FALSE(read_bytes(dir.file("a.lpk")) == read_bytes(dir.file("c.lpk")));
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--indirect-scale", "3"}, kFast),
                  "--indirect-scale", "");
+  expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--pane-level", "4"}, kFast),
+                 "--pane-level takes an integer in [0, 3]", "");
   // A scale asked for is kept or refused, never lowered (auto lowers it to fit).
   expect_failure(dir,
                  {"cook", scene, "-o", dir.file("x.lpk"), "--quality", "draft", "--lightmap-size",
