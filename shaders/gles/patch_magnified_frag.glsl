@@ -2,6 +2,8 @@
 // A magnified patch (pack_format.h, "Magnified patches"): the bilinear interpolation of the
 // decoded values (x = q/255, linear or squared) of four texels of the patch's own atlas
 // rectangle, times scale, sign and the draw's factor; the target adds it with blending (ONE, ONE).
+// Level-0 patches are drawn by patch_frag: these four taps would cost them twice the time on
+// llvmpipe, which runs both sides of a branch.
 precision highp float;
 precision highp int;
 

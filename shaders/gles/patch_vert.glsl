@@ -1,6 +1,9 @@
 #version 300 es
-// One light patch's quad: copies an atlas rectangle to the same-size rectangle of the target.
-// Positions and atlas coordinates are in texels, row 0 = top (texture row 0); no flip anywhere.
+// One light patch's quad: copies an atlas rectangle to the same-size rectangle of the target
+// (patch_frag), or magnifies a level-L patch's smaller one (patch_magnified_frag; pack_format.h,
+// "Magnified patches": its atlas corners span width / 2^L, so v_atlas at a destination texel
+// centre x is atlas_x + (x + 0.5) / 2^L). Both patch programs use this shader. Positions and
+// atlas coordinates are in texels, row 0 = top (texture row 0); no flip anywhere.
 precision highp float;
 precision highp int;
 
@@ -11,6 +14,9 @@ layout(location = 1) in vec2 a_atlas;   // atlas texel corner
 // (pack_format.h: kFlagDestinationMask), w: encoding (0 linear, 1 square)
 layout(location = 2) in vec4 a_patch;
 layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0..7)
+// The patch's atlas rectangle, inclusive texels: x0, y0, x1 - 1, y1 - 1 (a magnified patch's
+// bilinear taps are clamped to it: a patch never reads a neighbour's texels).
+layout(location = 4) in vec4 a_rect;
 
 uniform vec2 u_target_size;
 
@@ -21,6 +27,7 @@ flat out vec4 v_mask_b;
 flat out float v_scale;
 flat out int v_square;
 flat out int v_unit;
+flat out vec4 v_rect;
 
 vec4 channel_mask(float c) { return vec4(equal(vec4(c), vec4(0.0, 1.0, 2.0, 3.0))); }
 
@@ -41,5 +48,6 @@ void main() {
   v_scale = a_patch.x;
   v_square = a_patch.w > 0.5 ? 1 : 0;
   v_unit = int(a_unit + 0.5);
+  v_rect = a_rect;
   gl_Position = vec4(a_dest / u_target_size * 2.0 - 1.0, 0.0, 1.0);
 }

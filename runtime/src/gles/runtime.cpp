@@ -433,7 +433,7 @@ Status Runtime::create_programs(Error* error) {
   const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
   patch_program_ = link(shaders::patch_vert, shaders::patch_frag, error);
   if (!patch_program_) return Status::kGlError;
-  magnified_program_ = link(shaders::patch_magnified_vert, shaders::patch_magnified_frag, error);
+  magnified_program_ = link(shaders::patch_vert, shaders::patch_magnified_frag, error);
   if (!magnified_program_) return Status::kGlError;
   present_program_ = link(shaders::present_vert, shaders::present_frag, error);
   if (!present_program_) return Status::kGlError;
