@@ -103,6 +103,8 @@ PackOptions pack_options(const BakeOptions& bake) {
   PackOptions po;
   po.keep_colour = !bake.plan_effects;
   po.pane_level = bake.pane_level >= 0 ? bake.pane_level : kDefaultPaneLevel;
+  po.max_patch_level = bake.max_patch_level >= 0 ? bake.max_patch_level : kDefaultMaxPatchLevel;
+  po.level_tolerance = bake.level_tolerance > 0.0f ? bake.level_tolerance : kDefaultLevelTolerance;
   return po;
 }
 

@@ -548,14 +548,51 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       SourcePatch prototype = j.prototype;
       prototype.target = target;
       extract_patches(map, regions, j.threshold, max_dim, prototype, j.what, out);
-      if (j.prototype.kind == kGroupBase) return;
-      for (size_t k = first; k < out.size(); ++k) {
-        SourcePatch& p = out[k];
-        if (p.channels != 3) continue;
-        const float spread = colour_spread(p);
-        const bool collapsed = !options.keep_colour && collapse_untinted(p, spread);
-        (collapsed ? d.one : d.three)++;
-        d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);
+      if (j.prototype.kind != kGroupBase) {
+        for (size_t k = first; k < out.size(); ++k) {
+          SourcePatch& p = out[k];
+          if (p.channels != 3) continue;
+          const float spread = colour_spread(p);
+          const bool collapsed = !options.keep_colour && collapse_untinted(p, spread);
+          (collapsed ? d.one : d.three)++;
+          d.max_spread = std::max(d.max_spread, spread * j.prototype.weight);
+        }
+      }
+      // Smooth light-map patches (bounce light, soft falloff) at a coarser level, each chosen by
+      // its own error, so that sharp ones (shadow edges, creases) keep level 0. A patch that
+      // must keep level 0 is cut into kLevelTile tiles, each chosen again, where that takes
+      // fewer bytes (atlas bytes and records): the smooth part of a tile with one shadow edge
+      // still shrinks. Level 0 first within a job, so that the runtime's runs of one program
+      // stay long.
+      if (target == kTargetLightMap && options.max_patch_level > 0) {
+        const float steps = 2.0f * options.level_tolerance;  // threshold = half an output step
+        auto bytes = [](const SourcePatch& p) {
+          return uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
+                 sizeof(pack::PatchRecord);
+        };
+        const size_t end = out.size();
+        for (size_t k = first; k < end; ++k) {
+          SourcePatch& p = out[k];
+          const int level = coarsest_level(p, options.max_patch_level, steps * p.threshold);
+          if (level > 0) {
+            reduce_patch(p, level);
+            continue;
+          }
+          if (p.dest.w <= kLevelTile && p.dest.h <= kLevelTile) continue;
+          std::vector<SourcePatch> tiles = split_patch(p, kLevelTile);
+          uint64_t split_bytes = 0;
+          for (SourcePatch& t : tiles) {
+            const int l = coarsest_level(t, options.max_patch_level, steps * t.threshold);
+            if (l > 0) reduce_patch(t, l);
+            split_bytes += bytes(t);
+          }
+          if (tiles.empty() || split_bytes >= bytes(p)) continue;
+          p = std::move(tiles[0]);
+          for (size_t t = 1; t < tiles.size(); ++t) out.push_back(std::move(tiles[t]));
+        }
+        std::stable_sort(
+            out.begin() + std::ptrdiff_t(first), out.end(),
+            [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
       }
     };
     auto cost = [](const std::vector<SourcePatch>& v) {
@@ -902,21 +939,39 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       texels[p.target != 0] += uint64_t(p.dest.w) * uint64_t(p.dest.h);
     }
     uint64_t magnified = 0, magnified_texels = 0, magnified_atlas = 0;
+    // Light-map patches of light groups by level: patches, destination texels, atlas texels.
+    nlohmann::json by_level = nlohmann::json::array();
+    uint64_t lc[pack::kMaxPatchLevel + 1][3] = {};
     for (const SourcePatch& p : patches) {
+      const uint64_t dest = uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      const uint64_t atlas = uint64_t(p.stored_w()) * uint64_t(p.stored_h());
+      if (p.target == kTargetLightMap) {
+        uint64_t* l = lc[std::clamp(p.level, 0, int(pack::kMaxPatchLevel))];
+        l[0] += 1;
+        l[1] += dest;
+        l[2] += atlas;
+      }
       if (p.level == 0) continue;
       ++magnified;
-      magnified_texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
-      magnified_atlas += uint64_t(p.stored_w()) * uint64_t(p.stored_h());
+      magnified_texels += dest;
+      magnified_atlas += atlas;
     }
+    for (const auto& l : lc)
+      by_level.push_back({{"patches", l[0]}, {"destination_texels", l[1]}, {"atlas_texels", l[2]}});
     j["magnified_patches"] = {
         {"pane_level", options.pane_level},
+        {"max_patch_level", options.max_patch_level},
+        {"level_tolerance_steps", options.level_tolerance},
         {"patches", magnified},
         {"destination_texels", magnified_texels},
         {"atlas_texels", magnified_atlas},
+        {"light_map_patches_by_level", by_level},
         {"rule",
-         "moving lights' panes are stored at 1/2^pane_level of the indirect map's resolution "
-         "(means of 2^level x 2^level texel blocks) and magnified bilinearly inside each patch "
-         "by the runtime"}};
+         "moving lights' panes are stored at 1/2^pane_level of the indirect map's resolution; "
+         "each light-map patch at the coarsest level up to max_patch_level whose magnification "
+         "stays within level_tolerance_steps 8-bit output steps of the patch at every texel and "
+         "channel; a level stores the means of 2^level x 2^level texel blocks, magnified "
+         "bilinearly inside the patch by the runtime"}};
     j["patches_by_target"] = {{"light_map", count[0]}, {"indirect_map", count[1]}};
     j["texels_by_target"] = {{"light_map", texels[0]}, {"indirect_map", texels[1]}};
     nlohmann::json& im = j["indirect_map"];

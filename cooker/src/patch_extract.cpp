@@ -5,6 +5,7 @@
 
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/pack_format.h"
+#include "lightpatch/patch_accumulate.h"
 
 namespace lightpatch::cooker {
 
@@ -117,6 +118,73 @@ void reduce_patch(SourcePatch& patch, int level) {
   }
   patch.values = std::move(values);
   patch.significant = std::move(significant);
+}
+
+int coarsest_level(const SourcePatch& patch, int max_level, float tolerance) {
+  if (patch.level != 0) throw CookError("coarsest_level: a magnified patch");
+  const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels;
+  int chosen = 0;
+  for (int level = 1; level <= std::min(max_level, int(pack::kMaxPatchLevel)); ++level) {
+    // A patch one texel wide along an axis gains nothing there; one that is 1 x 1 nothing at all.
+    if ((w >> (level - 1)) < 2 && (h >> (level - 1)) < 2) break;
+    SourcePatch reduced = patch;
+    reduce_patch(reduced, level);
+    const int sw = reduced.stored_w(), sh = reduced.stored_h();
+    const float* v = reduced.values.data();
+    bool within = true;
+    for (int y = 0; y < h && within; ++y) {
+      const MagnifyTap<float> ty = magnify_tap<float>(uint32_t(y), uint32_t(sh), uint32_t(level));
+      for (int x = 0; x < w && within; ++x) {
+        const MagnifyTap<float> tx = magnify_tap<float>(uint32_t(x), uint32_t(sw), uint32_t(level));
+        const size_t a = (size_t(ty.i0) * sw + tx.i0) * ch, b = (size_t(ty.i0) * sw + tx.i1) * ch;
+        const size_t c = (size_t(ty.i1) * sw + tx.i0) * ch, d = (size_t(ty.i1) * sw + tx.i1) * ch;
+        for (int k = 0; k < ch; ++k) {
+          const float top = v[a + k] + tx.t * (v[b + k] - v[a + k]);
+          const float bottom = v[c + k] + tx.t * (v[d + k] - v[c + k]);
+          const float m = top + ty.t * (bottom - top);
+          if (!(std::fabs(m - patch.values[(size_t(y) * w + x) * ch + k]) <= tolerance)) {
+            within = false;
+            break;
+          }
+        }
+      }
+    }
+    if (!within) break;
+    chosen = level;
+  }
+  return chosen;
+}
+
+std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile) {
+  if (patch.level != 0 || tile < 1) throw CookError("split_patch: a magnified patch or no tile");
+  const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels;
+  std::vector<SourcePatch> out;
+  for (int ty = 0; ty < h; ty += tile) {
+    for (int tx = 0; tx < w; tx += tile) {
+      int x0 = tx + tile, y0 = ty + tile, x1 = tx - 1, y1 = ty - 1;
+      for (int y = ty; y < std::min(h, ty + tile); ++y)
+        for (int x = tx; x < std::min(w, tx + tile); ++x)
+          if (patch.significant[size_t(y) * w + x]) {
+            x0 = std::min(x0, x);
+            y0 = std::min(y0, y);
+            x1 = std::max(x1, x);
+            y1 = std::max(y1, y);
+          }
+      if (x1 < x0) continue;
+      SourcePatch q = patch;
+      q.dest = Rect{patch.dest.x + x0, patch.dest.y + y0, x1 - x0 + 1, y1 - y0 + 1};
+      q.values.assign(size_t(q.dest.w) * q.dest.h * ch, 0.0f);
+      q.significant.assign(size_t(q.dest.w) * q.dest.h, 0);
+      for (int y = 0; y < q.dest.h; ++y)
+        for (int x = 0; x < q.dest.w; ++x) {
+          const size_t from = size_t(y0 + y) * w + size_t(x0 + x), to = size_t(y) * q.dest.w + x;
+          q.significant[to] = patch.significant[from];
+          for (int c = 0; c < ch; ++c) q.values[to * ch + c] = patch.values[from * ch + c];
+        }
+      out.push_back(std::move(q));
+    }
+  }
+  return out;
 }
 
 float colour_spread(const SourcePatch& patch) {

@@ -50,8 +50,27 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
 // its 2^level x 2^level block of the patch's texels (the blocks at the right and bottom edges
 // may be partial), significant where any of them is. The runtime's bilinear magnification
 // (pack_format.h) then gives back a linear ramp exactly inside the patch, and the patch costs
-// 4^level times fewer atlas texels: for smooth light only (a moving light's pane).
+// 4^level times fewer atlas texels: for smooth light only (a moving light's pane; a light-map
+// patch where coarsest_level() says its magnification stays within a tolerance).
 void reduce_patch(SourcePatch& patch, int level);
+
+// The coarsest level in [1, max_level] (at most pack::kMaxPatchLevel) at which `patch` (level 0),
+// stored as reduce_patch() stores it and magnified by the runtime's rule (patch_accumulate.h,
+// magnify_tap), stays within `tolerance` (this map's units) of its own values at every texel and
+// channel of its rectangle; levels are tried from 1 up and the first that fails ends the search.
+// 0 when level 1 fails (or max_level < 1). Quantization is not included: the 8-bit codes add
+// their own half step either way.
+int coarsest_level(const SourcePatch& patch, int max_level, float tolerance);
+
+// The tiles a light-map patch that must keep level 0 is cut into before its tiles' levels are
+// chosen again (pack_builder.cpp). 8 made 2.9x the patches of 16 on the inn (53,380 against
+// 18,406 on the full inn) and drew its full rebuild at 1.7-1.8x the fill-rate floor on llvmpipe,
+// 16 at 1.2-1.3x.
+constexpr int kLevelTile = 16;
+
+// A level-0 patch cut into tiles of at most tile x tile texels, each shrunk to its significant
+// texels' box (tiles with none are dropped); the same values, the same attributes otherwise.
+std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile);
 
 // The largest max - min over a 3-channel patch's texels (its tint); 0 for other patches.
 float colour_spread(const SourcePatch& patch);

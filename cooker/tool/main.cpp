@@ -65,9 +65,18 @@ constexpr const char* kCookOptionsHelp =
     "                         1024)\n"
     "  --panes N              panes of the moving lights' bounce light (lights with extras\n"
     "                         \"moving\": true), before splitting those that reach round a\n"
-    "                         corner (at most 4N; default 32; docs/moving_lights.md)\n"
+    "                         corner (at most 4N; default 64; docs/moving_lights.md)\n"
     "  --pane-level L         0-3: the panes' patches at 1/2^L of the indirect map's\n"
     "                         resolution, magnified by the runtime (default 1)\n"
+    "  --max-patch-level L    0-3: each light-map patch stored at the coarsest level up to L\n"
+    "                         (1/2^L of the light map's resolution per axis, magnified\n"
+    "                         bilinearly by the runtime) whose magnification stays within\n"
+    "                         --level-tolerance of the patch at every texel; a patch that\n"
+    "                         cannot is cut into 16 x 16 tiles chosen alike. 0: every patch\n"
+    "                         texel for texel (default 3; README, \"Magnified light-map\n"
+    "                         patches\")\n"
+    "  --level-tolerance S    that tolerance in 8-bit output steps of the authored state,\n"
+    "                         0.01-16 (default 1: about the 8-bit rounding's own error)\n"
     "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
     "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
     "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
@@ -236,7 +245,8 @@ const Verb kVerbs[] = {
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
      "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--panes N] "
-     "[--pane-level L] [--seed N] [--threads N] [--quiet]",
+     "[--pane-level L] [--max-patch-level L] [--level-tolerance S] [--seed N] [--threads N] "
+     "[--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,

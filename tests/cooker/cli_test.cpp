@@ -152,11 +152,26 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
     EXPECT_NE(help.out.find("usage: lightpatch"), std::string::npos) << help.out;
   }
   const ToolRun cook = expect_success({"cook", "--help"});
-  for (const char* option :
-       {"--lightmap-size", "--texels-per-unit", "--quality", "--no-indirect", "--area-samples",
-        "--texel-samples", "--seed", "--integrator", "--gather-rays", "--indirect-scale",
-        "--denoise", "--threads", "--report", "--quiet", "--no-plan", "--measure-plan", "--panes",
-        "--pane-level"}) {
+  for (const char* option : {"--lightmap-size",
+                             "--texels-per-unit",
+                             "--quality",
+                             "--no-indirect",
+                             "--area-samples",
+                             "--texel-samples",
+                             "--seed",
+                             "--integrator",
+                             "--gather-rays",
+                             "--indirect-scale",
+                             "--denoise",
+                             "--threads",
+                             "--report",
+                             "--quiet",
+                             "--no-plan",
+                             "--measure-plan",
+                             "--panes",
+                             "--pane-level",
+                             "--max-patch-level",
+                             "--level-tolerance"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
   const ToolRun bake_state = expect_success({"bake-state", "--help"});
@@ -257,6 +272,12 @@ TEST(Cli, BakeOptionsReachTheBakeAndItsReport) {
                  "--indirect-scale", "");
   expect_failure(dir, cat({"cook", scene, "-o", dir.file("x.lpk"), "--pane-level", "4"}, kFast),
                  "--pane-level takes an integer in [0, 3]", "");
+  expect_failure(dir,
+                 cat({"cook", scene, "-o", dir.file("x.lpk"), "--max-patch-level", "4"}, kFast),
+                 "--max-patch-level takes an integer in [0, 3]", "");
+  expect_failure(dir,
+                 cat({"cook", scene, "-o", dir.file("x.lpk"), "--level-tolerance", "0"}, kFast),
+                 "--level-tolerance takes a number in", "");
   // A scale asked for is kept or refused, never lowered (auto lowers it to fit).
   expect_failure(dir,
                  {"cook", scene, "-o", dir.file("x.lpk"), "--quality", "draft", "--lightmap-size",

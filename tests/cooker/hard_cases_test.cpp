@@ -695,6 +695,81 @@ TEST(HardCases, IndirectMapHoldsTheBounceLightAndRecomposesLikeBakeState) {
   RecordProperty("worst_relative_rmse", std::to_string(expect_standard_states_match(c)));
 }
 
+// Light-map patches at the coarsest level their own error allows (PackOptions::max_patch_level,
+// the default) against every patch texel for texel: fewer atlas bytes, the bounce light's
+// patches magnified, and every state recomposes like bake_state and within a few output steps of
+// the level-0 pack at every texel, with no sign to the difference.
+TEST(HardCases, LightMapPatchLevelsSaveBytesAndRecomposeLikeBakeState) {
+  Cooked full, levels;
+  two_rooms(full.scene);
+  two_rooms(levels.scene);
+  PackOptions po0;
+  po0.max_patch_level = 0;
+  cook(full, 128, draft(true), po0);
+  cook(levels, 128, draft(true));
+  ASSERT_FALSE(HasFatalFailure());
+  auto atlas_bytes = [](const PackView& v) {
+    uint64_t b = 0;
+    for (uint32_t a = 0; a < v.atlas_count(); ++a)
+      b += uint64_t(v.atlas(a).width) * v.atlas(a).height * 4;
+    return b;
+  };
+  uint32_t magnified[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const PackView& v = k ? levels.pack : full.pack;
+    for (uint32_t i = 0; i < v.patch_count(); ++i)
+      magnified[k] += pack::patch_level(v.patch(i).flags) > 0 ? 1 : 0;
+  }
+  std::printf("atlas bytes: level 0 %llu, levels %llu (%.3fx); magnified patches %u of %u\n",
+              (unsigned long long)atlas_bytes(full.pack),
+              (unsigned long long)atlas_bytes(levels.pack),
+              double(atlas_bytes(levels.pack)) / double(atlas_bytes(full.pack)), magnified[1],
+              levels.pack.patch_count());
+  EXPECT_EQ(magnified[0], 0u);
+  EXPECT_GT(magnified[1], 0u);
+  EXPECT_LT(double(atlas_bytes(levels.pack)), 0.8 * double(atlas_bytes(full.pack)));
+  expect_standard_states_match(full);
+  expect_standard_states_match(levels);
+  // The two packs' recompositions, state by state, in output steps at every valid texel.
+  CpuRecomposer a, b;
+  Error error;
+  ASSERT_EQ(a.init(full.pack, &error), Status::kOk);
+  ASSERT_EQ(b.init(levels.pack, &error), Status::kOk);
+  const double step = full.maps.output_step;
+  ASSERT_EQ(step, levels.maps.output_step);
+  for (const NamedState& st : standard_states(full.scene)) {
+    SceneState sa, sb;
+    ASSERT_EQ(sa.init(full.pack, &error), Status::kOk);
+    ASSERT_EQ(sb.init(levels.pack, &error), Status::kOk);
+    apply_spec(full.pack, st.spec, &sa);
+    apply_spec(levels.pack, st.spec, &sb);
+    ASSERT_EQ(a.apply(sa), Status::kOk);
+    ASSERT_EQ(b.apply(sb), Status::kOk);
+    double worst = 0.0, diff = 0.0, sum = 0.0, d2 = 0.0, r2 = 0.0;
+    for (size_t t = 0; t < full.texels.valid.size(); ++t) {
+      if (!full.texels.valid[t]) continue;
+      for (size_t k = 0; k < 3; ++k) {
+        const double x = a.rgb()[t * 3 + k], y = b.rgb()[t * 3 + k];
+        // The 8-bit codes' own rounding grows with the patch's brightest texel (each pack
+        // rounds its patches): counted apart as 1 % of the texel.
+        worst = std::max(worst, std::max(0.0, std::fabs(y - x) - 0.01 * std::fabs(x)) / step);
+        diff += y - x;
+        sum += x;
+        d2 += (y - x) * (y - x);
+        r2 += x * x;
+      }
+    }
+    const double rmse = r2 > 0.0 ? std::sqrt(d2 / r2) : 0.0, bias = sum > 0.0 ? diff / sum : 0.0;
+    std::printf(
+        "  %-24s levels against level 0: relative RMSE %.4f%%, bias %+.4f%%, largest "
+        "texel difference %.2f output steps beyond 1 %% of the texel\n",
+        st.name.c_str(), 100.0 * rmse, 100.0 * bias, worst);
+    EXPECT_LT(rmse, 0.005) << st.name;
+    EXPECT_LT(std::fabs(bias), 0.002) << st.name;
+    EXPECT_LT(worst, 4.0) << st.name;
+  }
+}
+
 TEST(HardCases, SpotWithInnerEqualToOuterHasAHardEdge) {
   // The cone falloff divides by cos(inner) - cos(outer) = 0: finite, and a step at the edge.
   Light spot = test::spot_light("s", {0, 0, 0}, {0, 0, -1}, 1.0f, 0.4f, 0.4f);

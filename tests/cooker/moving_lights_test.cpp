@@ -253,9 +253,9 @@ TEST(MovingLights, PanesRecomposeTheLanternsBounceLight) {
 }
 
 // Panes stored at level 1 (pack_format.h, "Magnified patches"; the default) against level 0:
-// every pane patch and no other is magnified, the panes take about a quarter of the atlas
-// texels, and the recomposed bounce light stays what level 0 gives, up to the magnification of
-// smooth light.
+// every pane patch is magnified and no other patch changes, the panes take about a quarter of the
+// atlas texels, and the recomposed bounce light stays what level 0 gives, up to the magnification
+// of smooth light.
 TEST(MovingLights, PanesAtLevelOneTakeAQuarterOfTheAtlasAndKeepTheirLight) {
   Cooked c0, c1;
   cook(c0, false, 0);
@@ -287,8 +287,9 @@ TEST(MovingLights, PanesAtLevelOneTakeAQuarterOfTheAtlasAndKeepTheirLight) {
   EXPECT_GT(p0.patches, 0u);
   EXPECT_EQ(p0.at_level_1, 0u);
   EXPECT_EQ(p1.at_level_1, p1.patches);  // every pane patch at level 1, nothing else
-  EXPECT_EQ(p0.others_magnified, 0u);
-  EXPECT_EQ(p1.others_magnified, 0u);
+  // The light-map patches' levels are chosen on their own (PackOptions::max_patch_level): the
+  // pane level leaves them as they are.
+  EXPECT_EQ(p0.others_magnified, p1.others_magnified);
   const uint64_t t0 = p0.atlas_texels, t1 = p1.atlas_texels;
   std::printf("pane atlas channel-texels: level 0 %llu, level 1 %llu (%.3fx)\n",
               static_cast<unsigned long long>(t0), static_cast<unsigned long long>(t1),

@@ -96,6 +96,58 @@ TEST(PatchReduce, MagnificationGivesALinearRampBackWhereBlocksAreWhole) {
   }
 }
 
+// A w x h one-channel patch of slope g per texel along x.
+SourcePatch ramp_x(int w, int h, float g) {
+  SourcePatch p;
+  p.dest = Rect{0, 0, w, h};
+  p.values.resize(size_t(w) * h);
+  p.significant.assign(size_t(w) * h, 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) p.values[size_t(y) * w + x] = 100.0f + g * float(x);
+  return p;
+}
+
+TEST(CoarsestLevel, ARampKeepsTheLevelsWhoseEdgeErrorIsWithinTheTolerance) {
+  // Whole blocks: the magnification is exact inside and off by g * (2^L - 1) / 2 at the first
+  // and last texels (the clamp holds the edge block's mean): 0.5 g, 1.5 g, 3.5 g at L = 1, 2, 3.
+  const SourcePatch p = ramp_x(32, 16, 1.0f);
+  EXPECT_EQ(coarsest_level(p, 3, 0.49f), 0);
+  EXPECT_EQ(coarsest_level(p, 3, 0.51f), 1);
+  EXPECT_EQ(coarsest_level(p, 3, 1.49f), 1);
+  EXPECT_EQ(coarsest_level(p, 3, 1.51f), 2);
+  EXPECT_EQ(coarsest_level(p, 3, 3.51f), 3);
+  EXPECT_EQ(coarsest_level(p, 2, 3.51f), 2);  // never above the maximum asked for
+  EXPECT_EQ(coarsest_level(p, 0, 100.0f), 0);
+  // The closed form against the magnification written out above, at the chosen level.
+  SourcePatch r = p;
+  reduce_patch(r, 2);
+  double worst = 0.0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 32; ++x)
+      worst = std::max(worst, std::fabs(magnified(r, x, y, 0) - p.values[size_t(y) * 32 + x]));
+  EXPECT_NEAR(worst, 1.5, 1e-4);
+}
+
+TEST(CoarsestLevel, ASharpEdgeStaysAtFullResolutionAndAFlatPatchGoesToTheTop) {
+  SourcePatch edge = ramp_x(16, 16, 0.0f);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 9; x < 16; ++x) edge.values[size_t(y) * 16 + x] = 50.0f;  // a shadow's edge
+  EXPECT_EQ(coarsest_level(edge, 3, 1.0f), 0);
+  EXPECT_EQ(coarsest_level(ramp_x(16, 16, 0.0f), 3, 1e-6f), 3);
+  // One texel: nothing to gain.
+  EXPECT_EQ(coarsest_level(ramp_x(1, 1, 0.0f), 3, 1.0f), 0);
+  // Three channels: one channel's edge is enough to keep the patch at level 0.
+  SourcePatch tinted = ramp(16, 16, 3);
+  for (float& v : tinted.values) v = 1.0f;
+  EXPECT_EQ(coarsest_level(tinted, 2, 0.1f), 2);
+  tinted.values[(size_t(5) * 16 + 5) * 3 + 2] = 3.0f;
+  EXPECT_EQ(coarsest_level(tinted, 2, 0.1f), 0);
+  // A patch already magnified is refused.
+  SourcePatch reduced = ramp_x(8, 8, 0.0f);
+  reduce_patch(reduced, 1);
+  EXPECT_THROW(coarsest_level(reduced, 2, 1.0f), CookError);
+}
+
 TEST(PatchReduce, RefusesALevelOutOfRangeOrTwice) {
   SourcePatch p = ramp(4, 4, 1);
   EXPECT_THROW(reduce_patch(p, 0), CookError);

@@ -28,7 +28,9 @@ void cook_draft(CookedPack& c, float texels_per_unit, int indirect_scale) {
   if (indirect_scale > 1) options.indirect_scale = indirect_scale;  // else the preset's level
   BakedMaps maps = bake_maps(c.scene, c.layout, c.texels, *c.tracer, options, progress, report);
   finalize_maps(maps, c.scene, c.layout, c.texels);
-  c.bytes = build_pack(c.scene, c.layout, maps, PackOptions{}, report);
+  PackOptions po;
+  po.always_split = indirect_scale > 1;
+  c.bytes = build_pack(c.scene, c.layout, maps, po, report);
   Error error;
   ASSERT_EQ(PackView::open(c.bytes.data(), c.bytes.size(), &c.pack, &error), Status::kOk)
       << error.message;

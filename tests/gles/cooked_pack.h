@@ -28,8 +28,9 @@ struct CookedPack {
 
 // Cooks c.scene (finished) at `texels_per_unit`, draft quality, indirect light on; the pack is
 // opened into c.pack (gtest assertion on failure). `indirect_scale` 2, 4 or 8: the layout on
-// blocks of that many texels and bounce light stored in an indirect map where the cooker finds it
-// smaller (`cook --indirect-scale`); 1: none.
+// blocks of that many texels and every light group's bounce light stored in an indirect map
+// (PackOptions::always_split: the cooker's own choice by bytes may keep it in the light map,
+// whose smooth patches it stores magnified); 1: none.
 void cook_draft(CookedPack& c, float texels_per_unit, int indirect_scale = 1);
 
 // A headless GLES context with a runtime and the CPU reference recomposer on one pack.

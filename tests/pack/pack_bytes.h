@@ -52,8 +52,12 @@ inline uint64_t fill_unused_atlas_texels(const PackView& v, const uint8_t* origi
     for (uint32_t i = 0; i < v.patch_count(); ++i) {
       const pack::PatchRecord& p = v.patch(i);
       if (p.atlas != a) continue;
-      for (uint32_t y = p.atlas_y; y < uint32_t(p.atlas_y) + p.height; ++y) {
-        for (uint32_t x = p.atlas_x; x < uint32_t(p.atlas_x) + p.width; ++x) {
+      // A magnified patch covers its atlas rectangle, not its destination's size.
+      const uint32_t level = pack::patch_level(p.flags);
+      const uint32_t w = pack::patch_atlas_side(p.width, level);
+      const uint32_t h = pack::patch_atlas_side(p.height, level);
+      for (uint32_t y = p.atlas_y; y < uint32_t(p.atlas_y) + h; ++y) {
+        for (uint32_t x = p.atlas_x; x < uint32_t(p.atlas_x) + w; ++x) {
           for (uint32_t c = p.channel; c < uint32_t(p.channel) + p.channel_count; ++c)
             used[(size_t(y) * ar.width + x) * 4 + c] = 1;
         }

@@ -10,6 +10,7 @@
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/group_file.h"
 #include "lightpatch/cooker/io.h"
+#include "lightpatch/cooker/pack_builder.h"
 #include "lightpatch/pack_format.h"
 
 namespace lightpatch::cooker {
@@ -64,7 +65,7 @@ JobHash hash_of(const std::string& name) {
 // Every option is stored (threads aside): an option added to these structs must be added here and
 // to settings_from_json, or a job would run with its default. (Sizes on 64-bit Linux.)
 static_assert(sizeof(LayoutOptions) == 28, "LayoutOptions changed: update job_dir.cpp");
-static_assert(sizeof(BakeOptions) == 96, "BakeOptions changed: update job_dir.cpp");
+static_assert(sizeof(BakeOptions) == 104, "BakeOptions changed: update job_dir.cpp");
 static_assert(sizeof(ImportLimits) == 48, "ImportLimits changed: update job_dir.cpp");
 
 json settings_json(const CookSettings& s) {
@@ -95,6 +96,8 @@ json settings_json(const CookSettings& s) {
           {"probe_rays", b.probes.rays},
           {"panes", b.panes},
           {"pane_level", b.pane_level},
+          {"max_patch_level", b.max_patch_level},
+          {"level_tolerance", b.level_tolerance},
           {"moving_direct", b.moving_direct},
           {"max_triangles", s.import.max_triangles},
           {"max_vertices", s.import.max_vertices},
@@ -161,6 +164,10 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   s.bake.probes.rays = int_field(j, "probe_rays", 0, 1 << 20, file);
   s.bake.panes = int_field(j, "panes", 0, kMaxPaneOption, file);
   s.bake.pane_level = int_field(j, "pane_level", -1, int(pack::kMaxPatchLevel), file);
+  s.bake.max_patch_level = int_field(j, "max_patch_level", -1, int(pack::kMaxPatchLevel), file);
+  s.bake.level_tolerance = field<float>(j, "level_tolerance", file);
+  if (!(s.bake.level_tolerance <= kMaxLevelTolerance))  // <= 0 (or -0): the default
+    throw CookError(file + ": \"level_tolerance\" out of range");
   s.bake.moving_direct = field<bool>(j, "moving_direct", file);
   s.import.max_triangles = field<uint64_t>(j, "max_triangles", file);
   s.import.max_vertices = field<uint64_t>(j, "max_vertices", file);

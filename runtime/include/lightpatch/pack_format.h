@@ -264,7 +264,8 @@ constexpr int patch_destination(uint8_t flags) {
 }
 
 // Magnified patches. A patch of level L > 0 is stored at 1/2^L of its target map's resolution
-// per axis (smooth light, such as a moving light's pane, costs 4^L times fewer atlas texels):
+// per axis (smooth light, such as bounce light or a moving light's pane, costs 4^L times fewer
+// atlas texels):
 // PatchRecord::width and height stay its destination rectangle in target-map texels, and its
 // atlas rectangle at (atlas_x, atlas_y) is ceil(width / 2^L) x ceil(height / 2^L) texels. The
 // value at destination texel (x, y) of the patch (0 <= x < width, 0 <= y < height) is the

@@ -14,31 +14,34 @@
 
 namespace lightpatch {
 
+// The magnification rule's taps along one axis (pack_format.h, "Magnified patches"): destination
+// texel x of a patch stored at `level` on n texels reads stored texels i0 and i1 = i0 + 1 (both
+// clamped to [0, n - 1]) with weight t on i1, at s = (x + 0.5) / 2^level - 0.5. s and t are exact
+// in float and double (a power-of-two division of small integers). Precondition: n >= 1.
+template <typename T>
+struct MagnifyTap {
+  uint32_t i0, i1;
+  T t;
+};
+template <typename T>
+MagnifyTap<T> magnify_tap(uint32_t x, uint32_t n, uint32_t level) {
+  const T s = (T(x) + T(0.5)) / T(1u << level) - T(0.5);
+  const T fl = std::floor(s);  // s in [-0.5, n - 0.5): floor(s) >= -1
+  const int64_t i = int64_t(fl);
+  const int64_t last = int64_t(n) - 1;
+  return MagnifyTap<T>{uint32_t(std::clamp<int64_t>(i, 0, last)),
+                       uint32_t(std::clamp<int64_t>(i + 1, 0, last)), s - fl};
+}
+
 // One magnified patch (pack_format.h, "Magnified patches"): destination texel (x, y) gets the
-// bilinear interpolation of the decoded values `table` of the patch's own atlas rectangle at
-// s = (x + 0.5) / 2^level - 0.5 (per axis), both taps clamped to the rectangle. s and the weights
-// are exact in float and double (a power-of-two division of small integers). Indices and weights
-// are computed per texel: nothing to allocate.
+// bilinear interpolation of the decoded values `table` of the patch's own atlas rectangle at the
+// taps of magnify_tap(). Indices and weights are computed per texel: nothing to allocate.
 template <typename T>
 void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8_t* pixels,
                          uint32_t atlas_width, const T table[256], const T f[3], uint32_t step,
                          int destination, T* map, uint32_t map_width) {
   const uint32_t aw = pack::patch_atlas_side(p.width, level);
   const uint32_t ah = pack::patch_atlas_side(p.height, level);
-  const T inv = T(1) / T(1u << level);
-  // Tap i of an axis of n texels and its weight: s in [-0.5, n - 0.5), so floor(s) >= -1.
-  struct Tap {
-    uint32_t i0, i1;
-    T t;
-  };
-  auto tap = [inv](uint32_t x, uint32_t n) {
-    const T s = (T(x) + T(0.5)) * inv - T(0.5);
-    const T fl = std::floor(s);
-    const int64_t i = int64_t(fl);
-    const int64_t last = int64_t(n) - 1;
-    return Tap{uint32_t(std::clamp<int64_t>(i, 0, last)),
-               uint32_t(std::clamp<int64_t>(i + 1, 0, last)), s - fl};
-  };
   // The patch's first channel at atlas-rectangle texel (x, y).
   auto at = [&](uint32_t x, uint32_t y) {
     return pixels + ((size_t(p.atlas_y) + y) * atlas_width + p.atlas_x + x) * 4 + p.channel;
@@ -51,10 +54,10 @@ void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8
     return top + ty * (bottom - top);
   };
   for (uint32_t y = 0; y < p.height; ++y) {
-    const Tap ty = tap(y, ah);
+    const MagnifyTap<T> ty = magnify_tap<T>(y, ah, level);
     T* dst = map + ((size_t(p.dest_y) + y) * map_width + p.dest_x) * 3;
     for (uint32_t x = 0; x < p.width; ++x, dst += 3) {
-      const Tap tx = tap(x, aw);
+      const MagnifyTap<T> tx = magnify_tap<T>(x, aw, level);
       const uint8_t* a = at(tx.i0, ty.i0);
       const uint8_t* b = at(tx.i1, ty.i0);
       const uint8_t* c = at(tx.i0, ty.i1);

@@ -266,6 +266,7 @@ class Runtime {
   uint32_t patch_program_ = 0, magnified_program_ = 0, present_program_ = 0;
   int32_t factor_location_[2] = {-1, -1}, present_scale_location_ = -1;  // [0] patch, [1] magnified
   int32_t patch_size_location_[2] = {-1, -1}, present_size_location_ = -1;  // u_target_size
+  int32_t magnified_atlas_location_ = -1;  // the magnified program's u_atlas (its one sampler)
   // Per patch: end of the run of following patches whose atlases share a batch of 8 texture
   // units (one draw call per run; with <= 8 atlases every group is one run).
   uint32_t* run_end_ = nullptr;

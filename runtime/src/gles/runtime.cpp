@@ -169,7 +169,8 @@ class GlSink final : public DrawSink {
         glUniform3f(r_.factor_location_[k], f[0], f[1], f[2]);
         factor_set[k] = true;
       }
-      const uint32_t batch = r_.pack_.patch(first).atlas / kUnits;
+      const uint32_t atlas = r_.pack_.patch(first).atlas;
+      const uint32_t batch = atlas / kUnits;
       if (int(batch) != batch_) {
         for (uint32_t u = 0; u < kUnits; ++u) {
           const uint32_t a = batch * kUnits + u;
@@ -177,6 +178,11 @@ class GlSink final : public DrawSink {
           glBindTexture(GL_TEXTURE_2D, a < r_.pack_.atlas_count() ? r_.atlas_textures_[a] : 0);
         }
         batch_ = int(batch);
+      }
+      // The magnified program samples one atlas (a run of magnified patches has one): its unit.
+      if (k == 1 && int(atlas % kUnits) != magnified_unit_) {
+        magnified_unit_ = int(atlas % kUnits);
+        glUniform1i(r_.magnified_atlas_location_, magnified_unit_);
       }
       draw_quads(first, run - first);
       first = run;
@@ -252,6 +258,7 @@ class GlSink final : public DrawSink {
   uint8_t target_ = pack::kTargetLightMap;
   int batch_ = -1;
   int program_ = -1;                 // the patch program in use (use_patch_program), or -1
+  int magnified_unit_ = -1;          // the unit the magnified program's u_atlas reads (-1: unset)
   uint8_t sized_[2] = {0xFF, 0xFF};  // the target each patch program's size is set for
 };
 
@@ -304,7 +311,8 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
         p + 1 < pack.patch_count() && pack.patch(p + 1).group == pr.group &&
         pack.patch(p + 1).target == pr.target &&
         pack.patch(p + 1).atlas / kUnits == pr.atlas / kUnits &&
-        (pack::patch_level(pack.patch(p + 1).flags) > 0) == (pack::patch_level(pr.flags) > 0);
+        (pack::patch_level(pack.patch(p + 1).flags) > 0) == (pack::patch_level(pr.flags) > 0) &&
+        (pack::patch_level(pr.flags) == 0 || pack.patch(p + 1).atlas == pr.atlas);
     run_end_[p] = joins ? run_end_[p + 1] : p + 1;
   }
   open_ = true;
@@ -443,13 +451,16 @@ Status Runtime::create_programs(Error* error) {
     factor_location_[k] = glGetUniformLocation(patch_programs[k], "u_factor");
     patch_size_location_[k] = glGetUniformLocation(patch_programs[k], "u_target_size");
     glUseProgram(patch_programs[k]);
-    for (uint32_t u = 0; u < kUnits; ++u) {
+    for (uint32_t u = 0; u < kUnits && k == 0; ++u) {
       char name[16];
       std::snprintf(name, sizeof name, "u_atlas[%u]", u);
       glUniform1i(glGetUniformLocation(patch_programs[k], name), GLint(u));
     }
     glUniform2f(patch_size_location_[k], float(w), float(h));
   }
+  magnified_atlas_location_ = glGetUniformLocation(magnified_program_, "u_atlas");
+  glUseProgram(magnified_program_);
+  glUniform1i(magnified_atlas_location_, 0);
   glUseProgram(present_program_);
   glUniform1i(glGetUniformLocation(present_program_, "u_accumulator"), GLint(kAccumulatorUnit));
   glUniform2f(present_size_location_, float(w), float(h));

@@ -79,6 +79,12 @@ struct BakeOptions {
   // patches": 1/2^level of its resolution per axis, magnified by the runtime); < 0 =
   // kDefaultPaneLevel.
   int pane_level = -1;
+  // Light-map patches each stored at the coarsest level up to max_patch_level whose bilinear
+  // magnification stays within level_tolerance 8-bit output steps of the full-resolution patch
+  // at every texel (PackOptions, pack_builder.h); max_patch_level 0 keeps them all texel for
+  // texel, < 0 = kDefaultMaxPatchLevel; level_tolerance <= 0 = kDefaultLevelTolerance.
+  int max_patch_level = -1;
+  float level_tolerance = 0.0f;
   // bake_state: also the moving lights' direct light (for pictures; the runtime's maps hold only
   // their bounce light, the game draws their direct light).
   bool moving_direct = false;

@@ -11,10 +11,18 @@
 #include "lightpatch/cooker/maps.h"
 #include "lightpatch/cooker/report.h"
 #include "lightpatch/cooker/scene.h"
+#include "lightpatch/pack_format.h"
 
 namespace lightpatch::cooker {
 
 enum class EncodingPolicy { kAuto, kLinear, kSquare };
+
+// Light-map patches' coarsest level and its tolerance in 8-bit output steps by default
+// (PackOptions::max_patch_level, level_tolerance; README, "Magnified light-map patches", has the
+// table they were chosen by), and the largest tolerance an option may ask for.
+constexpr int kDefaultMaxPatchLevel = int(pack::kMaxPatchLevel);
+constexpr float kDefaultLevelTolerance = 1.0f;
+constexpr float kMaxLevelTolerance = 16.0f;
 
 struct PackOptions {
   int max_atlas_size = 2048;  // a multiple of pack::kAtlasAlign
@@ -35,6 +43,14 @@ struct PackOptions {
   // Moving lights' panes (bounce light only, stored on the indirect map) at this level
   // (pack_format.h, "Magnified patches"): 0 texel for texel, up to pack::kMaxPatchLevel.
   int pane_level = 0;
+  // Light-map patches (light groups, not panes) each at the coarsest level up to this one whose
+  // magnification stays within level_tolerance output steps of the patch at every texel
+  // (patch_extract.h, coarsest_level; pack_format.h, "Magnified patches"); 0: all texel for
+  // texel. Up to pack::kMaxPatchLevel.
+  int max_patch_level = kDefaultMaxPatchLevel;
+  // In 8-bit output steps of the final map at the authored state (twice the patches' threshold);
+  // > 0.
+  float level_tolerance = kDefaultLevelTolerance;
 };
 
 struct ProbeBake;  // probes.h
