@@ -117,11 +117,17 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["moving_lights"] = moving;
   j["panes"] = {{"count", p.pane_count()}, {"bytes", p.pane_bytes()}};
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
-                                         square = 0, indirect = 0, magnified = 0;
+                                         square = 0, indirect = 0, magnified = 0, atlas_texels = 0;
+  static_assert(pack::kMaxPatchLevel == 3, "by_level below lists four levels");
+  uint64_t by_level[pack::kMaxPatchLevel + 1] = {};
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
     const pack::PatchRecord& r = p.patch(i);
     by_kind[p.group(r.group).kind]++;
     texels += uint64_t(r.width) * r.height * r.channel_count;
+    const uint32_t level = pack::patch_level(r.flags);
+    by_level[level]++;
+    atlas_texels += uint64_t(pack::patch_atlas_side(r.width, level)) *
+                    pack::patch_atlas_side(r.height, level) * r.channel_count;
     negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
     one_channel += r.channel_count == 1 ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
@@ -141,7 +147,12 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                   {"square_encoded", square},
                   {"indirect_map", indirect},
                   {"magnified", magnified},
-                  {"channel_texels", texels}};
+                  // Patches at level 0, 1, 2 and 3 (pack_format.h, "Magnified patches").
+                  {"by_level", {by_level[0], by_level[1], by_level[2], by_level[3]}},
+                  // Destination channel-texels (what drawing every patch writes), and what the
+                  // patches take in the atlases (less where they are magnified).
+                  {"channel_texels", texels},
+                  {"atlas_channel_texels", atlas_texels}};
   nlohmann::ordered_json atlases = nlohmann::ordered_json::array();
   uint64_t atlas_bytes = 0;
   for (uint32_t i = 0; i < p.atlas_count(); ++i) {
@@ -304,13 +315,15 @@ int verb_info(Args& args) {
   std::printf("groups         %u\n", pack.view.group_count());
   std::printf(
       "patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
-      "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu, magnified %llu)\n",
+      "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu, magnified %llu: "
+      "level 1 %llu, 2 %llu, 3 %llu)\n",
       pack.view.patch_count(), pt["base"].get<unsigned long long>(),
       pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
       pt["pair_correction"].get<unsigned long long>(),
       pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
       pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>(),
-      pt["magnified"].get<unsigned long long>());
+      pt["magnified"].get<unsigned long long>(), pt["by_level"][1].get<unsigned long long>(),
+      pt["by_level"][2].get<unsigned long long>(), pt["by_level"][3].get<unsigned long long>());
   std::printf("atlases        %u:", pack.view.atlas_count());
   for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
     std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);

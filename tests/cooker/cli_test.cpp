@@ -62,6 +62,17 @@ TEST(Cli, CookInfoVerifyRecomposeAndBakeStateOnASmallScene) {
   const nlohmann::json j = nlohmann::json::parse(info_json.out);
   EXPECT_EQ(j["lightmap"]["width"], 32);
   EXPECT_EQ(j["objects"][0], "crate");
+  // Patches by level add up to all of them, and what they take in the atlases (magnified
+  // patches less than their destination) is what the waste figure counts.
+  const nlohmann::json& pt = j["patches"];
+  ASSERT_EQ(pt["by_level"].size(), 4u);
+  uint64_t levels = 0;
+  for (const auto& n : pt["by_level"]) levels += n.get<uint64_t>();
+  EXPECT_EQ(levels, pt["total"].get<uint64_t>());
+  EXPECT_EQ(pt["magnified"].get<uint64_t>(), levels - pt["by_level"][0].get<uint64_t>());
+  EXPECT_EQ(pt["atlas_channel_texels"], j["atlas_patch_bytes"]);
+  EXPECT_LE(pt["atlas_channel_texels"].get<uint64_t>(), pt["channel_texels"].get<uint64_t>());
+  EXPECT_NE(info.out.find("magnified"), std::string::npos) << info.out;
 
   expect_success(
       {"recompose", dir.file("room.lpk"), "--backend", "cpu", "-o", dir.file("authored.pfm")});
