@@ -570,20 +570,23 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           return uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
                  sizeof(pack::PatchRecord);
         };
+        // Stores p at the coarsest level its error allows; returns that level.
+        auto store_coarsest = [&](SourcePatch& p) {
+          SourcePatch reduced;
+          const int level =
+              coarsest_level(p, options.max_patch_level, steps * p.threshold, &reduced);
+          if (level > 0) p = std::move(reduced);
+          return level;
+        };
         const size_t end = out.size();
         for (size_t k = first; k < end; ++k) {
           SourcePatch& p = out[k];
-          const int level = coarsest_level(p, options.max_patch_level, steps * p.threshold);
-          if (level > 0) {
-            reduce_patch(p, level);
-            continue;
-          }
+          if (store_coarsest(p) > 0) continue;
           if (p.dest.w <= kLevelTile && p.dest.h <= kLevelTile) continue;
           std::vector<SourcePatch> tiles = split_patch(p, kLevelTile);
           uint64_t split_bytes = 0;
           for (SourcePatch& t : tiles) {
-            const int l = coarsest_level(t, options.max_patch_level, steps * t.threshold);
-            if (l > 0) reduce_patch(t, l);
+            store_coarsest(t);
             split_bytes += bytes(t);
           }
           if (tiles.empty() || split_bytes >= bytes(p)) continue;

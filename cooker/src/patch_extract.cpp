@@ -120,7 +120,8 @@ void reduce_patch(SourcePatch& patch, int level) {
   patch.significant = std::move(significant);
 }
 
-int coarsest_level(const SourcePatch& patch, int max_level, float tolerance) {
+int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
+                   SourcePatch* coarsest) {
   if (patch.level != 0) throw CookError("coarsest_level: a magnified patch");
   const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels;
   int chosen = 0;
@@ -139,9 +140,7 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance) {
         const size_t a = (size_t(ty.i0) * sw + tx.i0) * ch, b = (size_t(ty.i0) * sw + tx.i1) * ch;
         const size_t c = (size_t(ty.i1) * sw + tx.i0) * ch, d = (size_t(ty.i1) * sw + tx.i1) * ch;
         for (int k = 0; k < ch; ++k) {
-          const float top = v[a + k] + tx.t * (v[b + k] - v[a + k]);
-          const float bottom = v[c + k] + tx.t * (v[d + k] - v[c + k]);
-          const float m = top + ty.t * (bottom - top);
+          const float m = magnify_blend(v[a + k], v[b + k], v[c + k], v[d + k], tx.t, ty.t);
           if (!(std::fabs(m - patch.values[(size_t(y) * w + x) * ch + k]) <= tolerance)) {
             within = false;
             break;
@@ -151,6 +150,7 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance) {
     }
     if (!within) break;
     chosen = level;
+    if (coarsest) *coarsest = std::move(reduced);
   }
   return chosen;
 }

@@ -59,8 +59,10 @@ void reduce_patch(SourcePatch& patch, int level);
 // magnify_tap), stays within `tolerance` (this map's units) of its own values at every texel and
 // channel of its rectangle; levels are tried from 1 up and the first that fails ends the search.
 // 0 when level 1 fails (or max_level < 1). Quantization is not included: the 8-bit codes add
-// their own half step either way.
-int coarsest_level(const SourcePatch& patch, int max_level, float tolerance);
+// their own half step either way. With `coarsest` and a level > 0, *coarsest is the patch stored
+// at that level (what reduce_patch() makes of it), so a caller keeps what was checked.
+int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
+                   SourcePatch* coarsest = nullptr);
 
 // The tiles a light-map patch that must keep level 0 is cut into before its tiles' levels are
 // chosen again (pack_builder.cpp). 8 made 2.9x the patches of 16 on the inn (53,380 against

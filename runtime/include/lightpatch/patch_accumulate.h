@@ -25,12 +25,22 @@ struct MagnifyTap {
 };
 template <typename T>
 MagnifyTap<T> magnify_tap(uint32_t x, uint32_t n, uint32_t level) {
-  const T s = (T(x) + T(0.5)) / T(1u << level) - T(0.5);
+  // Times the reciprocal, exact for a power of two: no division on the drawing loop.
+  const T s = (T(x) + T(0.5)) * (T(1) / T(1u << level)) - T(0.5);
   const T fl = std::floor(s);  // s in [-0.5, n - 0.5): floor(s) >= -1
   const int64_t i = int64_t(fl);
   const int64_t last = int64_t(n) - 1;
   return MagnifyTap<T>{uint32_t(std::clamp<int64_t>(i, 0, last)),
                        uint32_t(std::clamp<int64_t>(i + 1, 0, last)), s - fl};
+}
+
+// The rule's interpolation of the four taps' values: along x on both rows, then along y (a, b
+// on row i0, c, d on row i1; tx, ty the taps' weights). The one order every path uses.
+template <typename T>
+T magnify_blend(T a, T b, T c, T d, T tx, T ty) {
+  const T top = a + tx * (b - a);
+  const T bottom = c + tx * (d - c);
+  return top + ty * (bottom - top);
 }
 
 // One magnified patch (pack_format.h, "Magnified patches"): destination texel (x, y) gets the
@@ -49,9 +59,7 @@ void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8
   // Bilinear interpolation of channel offset k between the four taps.
   auto lerp2 = [table](const uint8_t* a, const uint8_t* b, const uint8_t* c, const uint8_t* d,
                        uint32_t k, T tx, T ty) {
-    const T top = table[a[k]] + tx * (table[b[k]] - table[a[k]]);
-    const T bottom = table[c[k]] + tx * (table[d[k]] - table[c[k]]);
-    return top + ty * (bottom - top);
+    return magnify_blend<T>(table[a[k]], table[b[k]], table[c[k]], table[d[k]], tx, ty);
   };
   for (uint32_t y = 0; y < p.height; ++y) {
     const MagnifyTap<T> ty = magnify_tap<T>(y, ah, level);
