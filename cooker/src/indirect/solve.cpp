@@ -34,6 +34,21 @@ bool present_hit(const GatherOperator& op, const Crossing& rec, const std::vecto
   return false;
 }
 
+// The rays that `present` changes, per receiver: each ray that now ends on a present object, and
+// the coarse texel it ends on there (kNoTexel: the object's back), in ray order. Built once per
+// solve from the receivers that cross a present object: every bounce reads it, and a bounce that
+// walked every receiver's crossings (most of them through absent objects) spent half its time on
+// them.
+struct PresentCrossings {
+  struct Ray {
+    uint32_t ray;
+    uint32_t coarse;
+  };
+  std::vector<uint32_t> offset;  // coarse -> [offset, next) into rays; empty: no object present
+  std::vector<Ray> rays;
+  std::vector<uint32_t> receivers;  // crossing_receivers(present), ascending
+};
+
 // Receivers whose rays can reach a non-zero source, in coarse order: by tiles, then (with
 // `reach`) by each receiver's own rays of `level` where that costs less than the rays it spares.
 std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& src,
@@ -81,12 +96,43 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
   return out;
 }
 
+// The receivers with a ray that now ends on a present object.
+std::vector<uint32_t> crossing_receivers(const GatherOperator& op,
+                                         const std::vector<uint8_t>& present) {
+  std::vector<uint32_t> crossing;
+  for (size_t o = 0; o < present.size(); ++o) {
+    if (!present[o]) continue;
+    crossing.insert(crossing.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
+  }
+  std::sort(crossing.begin(), crossing.end());
+  crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+  return crossing;
+}
+
+PresentCrossings present_crossings(const GatherOperator& op, const std::vector<uint8_t>& present) {
+  PresentCrossings pc;
+  if (std::find(present.begin(), present.end(), uint8_t(1)) == present.end()) return pc;
+  const size_t nc = op.grid.size();
+  pc.offset.assign(nc + 1, 0);
+  pc.receivers = crossing_receivers(op, present);
+  for (uint32_t c : pc.receivers) {
+    for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
+      const Crossing& rec = op.crossings[r];
+      uint32_t oc = kNoTexel;
+      if (!present_hit(op, rec, present, &oc)) continue;
+      pc.rays.push_back({rec.ray, oc});
+      ++pc.offset[c + 1];
+    }
+  }
+  for (size_t c = 0; c < nc; ++c) pc.offset[c + 1] += pc.offset[c];
+  return pc;
+}
+
 // out[c] = mean over the first rays of `level` of c's rays of src at what each ray hits with
 // `present` objects in place, for every receiver c (others untouched: the caller zeroes `out`).
-void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
-                 const CoarseMap& src, const std::vector<uint32_t>& receivers, int threads,
-                 int level, CoarseMap& out) {
-  const bool objects = !present.empty();
+void gather_into(const GatherOperator& op, const PresentCrossings& present, const CoarseMap& src,
+                 const std::vector<uint32_t>& receivers, int threads, int level, CoarseMap& out) {
+  const bool objects = !present.offset.empty();
   const int n = op.level_rays[level];
   const std::vector<float>& weight = op.weight[level];
   const int items = int((receivers.size() + kChunk - 1) / kChunk);
@@ -105,12 +151,10 @@ void gather_into(const GatherOperator& op, const std::vector<uint8_t>& present,
       for (int k = 0; k < n; ++k)
         if (hits[k] != kNoTexel) sum += src[hits[k]];
       if (objects) {
-        for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
-          const Crossing& rec = op.crossings[r];
-          if (int(rec.ray) >= n) break;  // crossings are in ray order
-          uint32_t oc = kNoTexel;
-          if (!present_hit(op, rec, present, &oc)) continue;
-          sum += at(src, oc) - at(src, hits[rec.ray]);
+        for (uint32_t r = present.offset[c]; r < present.offset[c + 1]; ++r) {
+          const PresentCrossings::Ray x = present.rays[r];
+          if (int(x.ray) >= n) break;  // in ray order
+          sum += at(src, x.coarse) - at(src, hits[x.ray]);
         }
       }
       out[c] = sum * weight[c];
@@ -150,36 +194,21 @@ bool prune(CoarseMap& delta, float tolerance) {
 
 // For receiver c and the series term of `level`: what c's rays of that level that now end on a
 // present object no longer see (the static hit's `radiance`) against what they see instead.
-glm::vec3 crossing_change(const GatherOperator& op, const std::vector<uint8_t>& present,
+glm::vec3 crossing_change(const GatherOperator& op, const PresentCrossings& present,
                           const CoarseMap& radiance, int level, uint32_t c) {
   glm::vec3 sum(0.0f);
-  for (uint32_t r = op.crossing_offset[c]; r < op.crossing_offset[c + 1]; ++r) {
-    const Crossing& rec = op.crossings[r];
-    if (int(rec.ray) >= op.level_rays[level]) break;
-    uint32_t oc = kNoTexel;
-    if (!present_hit(op, rec, present, &oc)) continue;
-    sum += at(radiance, op.hit[size_t(c) * size_t(op.rays) + rec.ray]) - at(radiance, oc);
+  for (uint32_t r = present.offset[c]; r < present.offset[c + 1]; ++r) {
+    const PresentCrossings::Ray x = present.rays[r];
+    if (int(x.ray) >= op.level_rays[level]) break;
+    sum += at(radiance, op.hit[size_t(c) * size_t(op.rays) + x.ray]) - at(radiance, x.coarse);
   }
   return sum * op.weight[level][c];
-}
-
-// The receivers with a ray that now ends on a present object.
-std::vector<uint32_t> crossing_receivers(const GatherOperator& op,
-                                         const std::vector<uint8_t>& present) {
-  std::vector<uint32_t> crossing;
-  for (size_t o = 0; o < present.size(); ++o) {
-    if (!present[o]) continue;
-    crossing.insert(crossing.end(), op.coarse_crossing[o].begin(), op.coarse_crossing[o].end());
-  }
-  std::sort(crossing.begin(), crossing.end());
-  crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
-  return crossing;
 }
 
 // Runs a Neumann series: bounce b gathers albedo * term b-1 through the rays of its level, plus
 // `extra[b]` (a change's crossing terms) where given. Returns its terms: the first, the second and
 // the rest summed.
-Bounces run_series(const GatherOperator& op, const std::vector<uint8_t>& present, CoarseMap first,
+Bounces run_series(const GatherOperator& op, const PresentCrossings& present, CoarseMap first,
                    const CoarseMap* extra_second, const CoarseMap* extra_rest,
                    const SolveOptions& options, SolveStats* stats) {
   const CoarseGrid& g = op.grid;
@@ -317,12 +346,13 @@ CoarseMap Bounces::total() const {
 Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const CoarseMap& source, const SolveOptions& options, SolveStats* stats,
                        const NearSource* near) {
+  const PresentCrossings crossings = present_crossings(op, present);
   const std::vector<uint32_t> receivers = receivers_of(op, source, options.reach, 0);
   CoarseMap first(source.size(), glm::vec3(0.0f));
-  gather_into(op, present, source, receivers, options.threads, 0, first);
+  gather_into(op, crossings, source, receivers, options.threads, 0, first);
   if (near) add_near(op, *options.near, source, *near, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  return run_series(op, present, std::move(first), nullptr, nullptr, options, stats);
+  return run_series(op, crossings, std::move(first), nullptr, nullptr, options, stats);
 }
 
 EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
@@ -346,30 +376,31 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
   // Each term of I(present) reads through its rays what the previous term sends on; where a ray
   // now ends on an object, what the static hit sent in the empty series (the same term) is
   // replaced by what the object sends: the crossing terms, one per level.
-  const std::vector<uint32_t> crossing = crossing_receivers(op, present);
+  const PresentCrossings crossings = present_crossings(op, present);
   CoarseMap second(nc, glm::vec3(0.0f)), rest(nc, glm::vec3(0.0f));
   CoarseMap first(nc, glm::vec3(0.0f));
   // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
   // on an object included: their tiles are among each tile's sources).
   const std::vector<uint32_t> receivers = receivers_of(op, direct_change, options.reach, 0);
-  gather_into(op, present, direct_change, receivers, options.threads, 0, first);
+  gather_into(op, crossings, direct_change, receivers, options.threads, 0, first);
   if (near_change) add_near(op, *options.near, direct_change, *near_change, first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  for (uint32_t c : crossing) {
-    first[c] += crossing_change(op, present, empty.direct, 0, c);
-    second[c] += crossing_change(op, present, empty.first, 1, c);
-    rest[c] += crossing_change(op, present, empty.later, 2, c);
+  for (uint32_t c : crossings.receivers) {
+    first[c] += crossing_change(op, crossings, empty.direct, 0, c);
+    second[c] += crossing_change(op, crossings, empty.first, 1, c);
+    rest[c] += crossing_change(op, crossings, empty.later, 2, c);
   }
-  return run_series(op, present, std::move(first), &second, &rest, options, stats).total();
+  return run_series(op, crossings, std::move(first), &second, &rest, options, stats).total();
 }
 
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,
                         const EmptyRadiance& empty) {
   float best = 0.0f;
-  for (uint32_t c : crossing_receivers(op, present)) {
-    const glm::vec3 v = crossing_change(op, present, empty.direct, 0, c) +
-                        crossing_change(op, present, empty.first, 1, c) +
-                        crossing_change(op, present, empty.later, 2, c);
+  const PresentCrossings crossings = present_crossings(op, present);
+  for (uint32_t c : crossings.receivers) {
+    const glm::vec3 v = crossing_change(op, crossings, empty.direct, 0, c) +
+                        crossing_change(op, crossings, empty.first, 1, c) +
+                        crossing_change(op, crossings, empty.later, 2, c);
     best = std::max(best, max3(v));
   }
   return best;
