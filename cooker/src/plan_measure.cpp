@@ -126,7 +126,8 @@ void add_plan_measurement(json& planned, const json& forced) {
         d["time_saved_s"] = (*it->second)["seconds"];
         d["time_saved_covers"] =
             "the forced run's work for this decision alone (an object's change to a group's "
-            "bounce light)";
+            "bounce light; changes are solved several at once, so its share of theirs by the "
+            "rays it gathered)";
         ++timed;
       }
     }

@@ -326,16 +326,27 @@ TEST(Indirect, SingleObjectRecompositionEqualsBakeState) {
     EXPECT_EQ(a.shadows[k].map.data, b.shadows[k].map.data);
 }
 
+// The box room's gather rays (64 per coarse texel, indirect level 2) and their reach.
+struct BoxRoomGather {
+  BoxRoom box;
+  test::Prepared f = test::prepare(box.scene, 64);
+  GatherOperator op;
+  GatherReach reach;
+  BoxRoomGather() {
+    GatherOptions go;
+    go.rays = 64;
+    go.threads = 2;
+    op = build_gather(box.scene, f.layout, f.texels, *f.tracer, 2, go);
+    reach = gather_reach(op, 2);
+  }
+};
+
 // GatherReach (solve.h) only spares the gathers whose sum is 0: with it the series visit fewer
 // receivers of a sparse source and give the same bits, objects present or not.
 TEST(Indirect, ReachVisitsFewerReceiversAndGivesTheSameBits) {
-  BoxRoom box;
-  const test::Prepared f = test::prepare(box.scene, 64);
-  GatherOptions go;
-  go.rays = 64;
-  go.threads = 2;
-  const GatherOperator op = build_gather(box.scene, f.layout, f.texels, *f.tracer, 2, go);
-  const GatherReach reach = gather_reach(op, 2);
+  const BoxRoomGather box;
+  const GatherOperator& op = box.op;
+  const GatherReach& reach = box.reach;
   const size_t nc = op.grid.size();
   // Light on one tile only (an object's shadow), and light everywhere.
   CoarseMap sparse(nc, glm::vec3(0.0f)), dense(nc);
@@ -369,6 +380,58 @@ TEST(Indirect, ReachVisitsFewerReceiversAndGivesTheSameBits) {
                        solve_change(op, present, e, sparse, fast)));
     }
   }
+}
+
+// solve_changes (solve.h) runs several changes side by side, each bounce's gathers sharing one
+// pass over the stored rays: each job must get the bits it gets alone, whatever its batch (more
+// jobs than kChangeBatch, sparse and dense sources, one object, both, none), on any thread count.
+TEST(Indirect, BatchedChangesEqualEachChangeSolvedAlone) {
+  const BoxRoomGather box;
+  const GatherOperator& op = box.op;
+  const GatherReach& reach = box.reach;
+  const size_t nc = op.grid.size();
+  CoarseMap light(nc);
+  for (size_t c = 0; c < nc; ++c) light[c] = glm::vec3(0.5f + 0.01f * float(c % 7), 0.3f, 0.1f);
+  SolveOptions so;
+  so.tolerance = 1e-5f;
+  so.max_bounces = 12;
+  so.threads = 2;
+  so.reach = &reach;
+  const Bounces empty = solve_indirect(op, {}, light, so);
+  const EmptyRadiance e = empty_radiance(op, light, empty);
+  const std::vector<std::vector<uint8_t>> presents = {{1, 0}, {0, 1}, {1, 1}, {0, 0}};
+  std::vector<ChangeJob> jobs;
+  for (size_t j = 0; j < kChangeBatch + 3; ++j) {
+    ChangeJob job;
+    job.present = &presents[j % presents.size()];
+    job.direct_change.assign(nc, glm::vec3(0.0f));
+    // A source on a few tiles (an object's shadow), a different one each job; every fifth dense.
+    for (size_t c = 0; c < nc; ++c)
+      if (j % 5 == 4 || op.tile_of[c] % (j + 2) == 0)
+        job.direct_change[c] = glm::vec3(0.2f * float(j + 1), 0.1f, 0.05f * float(c % 3));
+    jobs.push_back(std::move(job));
+  }
+  std::vector<SolveStats> stats;
+  const std::vector<CoarseMap> together = solve_changes(op, e, jobs, so, &stats);
+  SolveOptions one = so;
+  one.threads = 1;
+  const std::vector<CoarseMap> single_thread = solve_changes(op, e, jobs, one);
+  ASSERT_EQ(together.size(), jobs.size());
+  ASSERT_EQ(stats.size(), jobs.size());
+  bool some_differ = false;
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    SolveStats alone_stats;
+    const CoarseMap alone =
+        solve_change(op, *jobs[j].present, e, jobs[j].direct_change, so, &alone_stats);
+    ASSERT_EQ(alone.size(), nc);
+    EXPECT_EQ(std::memcmp(alone.data(), together[j].data(), nc * sizeof(alone[0])), 0) << j;
+    EXPECT_EQ(std::memcmp(alone.data(), single_thread[j].data(), nc * sizeof(alone[0])), 0) << j;
+    EXPECT_EQ(alone_stats.bounces, stats[j].bounces) << j;
+    EXPECT_EQ(alone_stats.gathers, stats[j].gathers) << j;
+    if (j > 0 && std::memcmp(together[j].data(), together[0].data(), nc * sizeof(alone[0])) != 0)
+      some_differ = true;
+  }
+  EXPECT_TRUE(some_differ) << "the jobs should not all give one map";
 }
 
 // Near hits (gather.h NearHit): gather rays that land within two texels of where they leave

@@ -99,33 +99,54 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
     if (bounce) {
       const size_t jobs = cand.sets.size() + lg.bounce_only.size();
       std::vector<double> seconds(jobs, 0.0);
-      progress.begin("bounce of objects: " + lg.name, jobs);
-      parallel_for(int(jobs), b.threads, [&](int j) {
-        const auto tj = std::chrono::steady_clock::now();
+      // An object that blocks no direct light is solved only if the cheap bound of its change's
+      // first bounce says it may matter.
+      std::vector<float> first(lg.bounce_only.size(), 0.0f);
+      parallel_for(int(lg.bounce_only.size()), b.threads, [&](int q) {
+        const auto tq = std::chrono::steady_clock::now();
         std::vector<uint8_t> present(scene.objects.size(), 0);
-        if (size_t(j) < cand.sets.size()) {
-          for (int o : cand.sets[size_t(j)]) present[size_t(o)] = 1;
-          FineSum blocked, blocked_points;
-          blocked.sparse.push_back({&dp.shadow[size_t(j)], 1.0f});
-          if (points) blocked_points.sparse.push_back({&points->shadow[size_t(j)], 1.0f});
-          change[size_t(j)] = ind->change(gb, present, blocked, blocked_points, lg.threshold);
-        } else {
-          const size_t q = size_t(j) - cand.sets.size();
-          present[size_t(lg.bounce_only[q])] = 1;
-          const float first = ind->first_change(gb, present);
-          const float bar = kBounceOnlyFraction * at;
-          if (planned && first < bar) {
-            only_reason[q] = "first bounce of its change " + std::to_string(first) +
-                             " below a quarter output step (" + std::to_string(bar) + ")";
-          } else {
-            only_reason[q] = "first bounce of its change " + std::to_string(first);
-            only[q] = ind->change(gb, present, FineSum{}, FineSum{}, lg.threshold);
-          }
-        }
-        seconds[size_t(j)] = seconds_since(tj);
-        progress.advance();
+        present[size_t(lg.bounce_only[size_t(q)])] = 1;
+        first[size_t(q)] = ind->first_change(gb, present);
+        seconds[cand.sets.size() + size_t(q)] = seconds_since(tq);
       });
+      std::vector<ChangeRequest> requests;
+      std::vector<size_t> job_of;  // request -> job (a slot, then cand.sets.size() + q)
+      for (size_t j = 0; j < cand.sets.size(); ++j) {
+        ChangeRequest r;
+        r.present.assign(scene.objects.size(), 0);
+        for (int o : cand.sets[j]) r.present[size_t(o)] = 1;
+        r.blocked.sparse.push_back({&dp.shadow[j], 1.0f});
+        if (points) r.blocked_points.sparse.push_back({&points->shadow[j], 1.0f});
+        requests.push_back(std::move(r));
+        job_of.push_back(j);
+      }
+      for (size_t q = 0; q < lg.bounce_only.size(); ++q) {
+        const float bar = kBounceOnlyFraction * at;
+        if (planned && first[q] < bar) {
+          only_reason[q] = "first bounce of its change " + std::to_string(first[q]) +
+                           " below a quarter output step (" + std::to_string(bar) + ")";
+          continue;
+        }
+        only_reason[q] = "first bounce of its change " + std::to_string(first[q]);
+        ChangeRequest r;
+        r.present.assign(scene.objects.size(), 0);
+        r.present[size_t(lg.bounce_only[q])] = 1;
+        requests.push_back(std::move(r));
+        job_of.push_back(cand.sets.size() + q);
+      }
+      progress.begin("bounce of objects: " + lg.name, requests.size());
+      std::vector<double> solve_s;
+      std::vector<BounceMap> solved =
+          ind->changes(gb, requests, lg.threshold, b.threads, &solve_s, &progress);
       progress.end();
+      for (size_t i = 0; i < requests.size(); ++i) {
+        const size_t j = job_of[i];
+        seconds[j] += solve_s[i];
+        if (j < cand.sets.size())
+          change[j] = std::move(solved[i]);
+        else
+          only[j - cand.sets.size()] = std::move(solved[i]);
+      }
       for (size_t j = 0; j < cand.sets.size(); ++j)
         decide(DecisionKind::kObjectBounce, DecisionStage::kTraced, cand.objects[j], -1, true,
                "blocks direct light: its change to the bounce light is solved", std::nan(""),
@@ -183,6 +204,9 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
 
   // Overlaps: where two objects block the same rays, S_a + S_b removes that light twice; the
   // pair's correction adds it back while both are visible (inclusion-exclusion, DESIGN.md).
+  std::vector<std::pair<int, int>> kept_pairs;  // slots of each correction kept, in dp.pairs order
+  std::vector<PairCorrectionMap> corrections;
+  corrections.reserve(dp.pairs.size());  // the requests below point at their maps
   for (auto& [key, img] : dp.pairs) {
     const int oa = cand.objects[size_t(key.first)], ob = cand.objects[size_t(key.second)];
     const float peak = peak_of(img, texels);
@@ -208,31 +232,42 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
     pc.object_a = std::min(oa, ob);
     pc.object_b = std::max(oa, ob);
     pc.map = std::move(img);
-    if (bounce) {
-      // The pair's joint change to the bounce light, from the same rays: the bounce part of the
-      // correction is change_a + change_b - change_ab (one object hides the other's bounce).
-      std::vector<uint8_t> present(scene.objects.size(), 0);
-      present[size_t(oa)] = present[size_t(ob)] = 1;
-      FineSum joint, joint_points;
-      joint.sparse = {{&dp.shadow[size_t(key.first)], 1.0f},
-                      {&dp.shadow[size_t(key.second)], 1.0f}};
-      joint.dense = {{&pc.map, -1.0f}};
+    if (grey) pc.map = first_channel(pc.map);
+    corrections.push_back(std::move(pc));
+    kept_pairs.push_back(key);
+  }
+  if (bounce && !corrections.empty()) {
+    // Each pair's joint change to the bounce light, from the same rays: the bounce part of the
+    // correction is change_a + change_b - change_ab (one object hides the other's bounce).
+    std::vector<ChangeRequest> requests(corrections.size());
+    for (size_t i = 0; i < corrections.size(); ++i) {
+      const auto [sa, sb] = kept_pairs[i];
+      ChangeRequest& r = requests[i];
+      r.present.assign(scene.objects.size(), 0);
+      r.present[size_t(corrections[i].object_a)] = r.present[size_t(corrections[i].object_b)] = 1;
+      r.blocked.sparse = {{&dp.shadow[size_t(sa)], 1.0f}, {&dp.shadow[size_t(sb)], 1.0f}};
+      r.blocked.dense = {{&corrections[i].map, -1.0f}};
       if (const DirectPass* points = dp.points.get()) {
-        joint_points.sparse = {{&points->shadow[size_t(key.first)], 1.0f},
-                               {&points->shadow[size_t(key.second)], 1.0f}};
-        auto it = points->pairs.find(key);
-        if (it != points->pairs.end()) joint_points.dense = {{&it->second, -1.0f}};
+        r.blocked_points.sparse = {{&points->shadow[size_t(sa)], 1.0f},
+                                   {&points->shadow[size_t(sb)], 1.0f}};
+        auto it = points->pairs.find({sa, sb});
+        if (it != points->pairs.end()) r.blocked_points.dense = {{&it->second, -1.0f}};
       }
-      const BounceMap ab = ind->change(gb, present, joint, joint_points, lg.threshold);
+    }
+    progress.begin("bounce of overlaps: " + lg.name, requests.size());
+    const std::vector<BounceMap> joint =
+        ind->changes(gb, requests, lg.threshold, b.threads, nullptr, &progress);
+    progress.end();
+    for (size_t i = 0; i < corrections.size(); ++i) {
+      const auto [sa, sb] = kept_pairs[i];
+      const BounceMap& ab = joint[i];
       BounceMap p(ab.size());
       for (size_t c = 0; c < p.size(); ++c)
-        p[c] = change[size_t(key.first)][c] + change[size_t(key.second)][c] - ab[c];
-      ind->add(std::move(p), pc.map, &pc.indirect);
-    } else if (grey) {
-      pc.map = first_channel(pc.map);
+        p[c] = change[size_t(sa)][c] + change[size_t(sb)][c] - ab[c];
+      ind->add(std::move(p), corrections[i].map, &corrections[i].indirect);
     }
-    out.pair_corrections.push_back(std::move(pc));
   }
+  for (PairCorrectionMap& pc : corrections) out.pair_corrections.push_back(std::move(pc));
   // Triple overlaps (three objects blocking one ray) are not corrected: the decision says how
   // much light they carry next to the pair overlaps that are.
   if (dp.doubly_blocked > 0.0 || dp.triply_blocked > 0.0) {

@@ -9,6 +9,7 @@
 #include "indirect/gather.h"
 #include "indirect/integrator.h"
 #include "indirect/solve.h"
+#include "worker_pool.h"
 
 namespace lightpatch::cooker {
 
@@ -28,6 +29,10 @@ glm::vec3 FineSum::at(size_t texel) const {
 }
 
 namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
 
 // The near hits as DirectPoints, in the order of a Morton curve over their bounds (10 bits an
 // axis).
@@ -119,20 +124,45 @@ class GatherIntegrator final : public IndirectIntegrator {
     return g;
   }
 
-  BounceMap change(const GroupBounce& group, const std::vector<uint8_t>& present,
-                   const FineSum& blocked, const FineSum& blocked_points,
-                   float threshold) const override {
-    const CoarseMap src =
-        blocked.sparse.empty() && blocked.dense.empty()
-            ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
-            : coarse_source_of(op_, b_.texels, [&](size_t t) { return blocked.at(t); });
-    const bool near = !blocked_points.sparse.empty() || !blocked_points.dense.empty();
-    const NearSource near_src = near ? near_source(blocked_points) : NearSource{};
-    SolveStats st;
-    BounceMap change = solve_change(op_, present, empty(group), src, options(threshold, 1), &st,
-                                    near ? &near_src : nullptr);
-    count(st, changes_);
-    return change;
+  std::vector<BounceMap> changes(const GroupBounce& group,
+                                 const std::vector<ChangeRequest>& requests, float threshold,
+                                 int threads, std::vector<double>* seconds,
+                                 Progress* progress) const override {
+    const auto t0 = std::chrono::steady_clock::now();
+    const size_t n = requests.size();
+    std::vector<ChangeJob> jobs(n);
+    std::vector<NearSource> near(n);
+    parallel_for(int(n), threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      const ChangeRequest& r = requests[j];
+      jobs[j].present = &r.present;
+      jobs[j].direct_change =
+          r.blocked.sparse.empty() && r.blocked.dense.empty()
+              ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
+              : coarse_source_of(op_, b_.texels, [&](size_t t) { return r.blocked.at(t); });
+      if (!r.blocked_points.sparse.empty() || !r.blocked_points.dense.empty()) {
+        near[j] = near_source(r.blocked_points);
+        jobs[j].near_change = &near[j];
+      }
+    });
+    std::vector<SolveStats> st;
+    std::vector<BounceMap> out =
+        solve_changes(op_, empty(group), jobs, options(threshold, threads), &st, [&](size_t k) {
+          if (progress) progress->advance(k);
+        });
+    uint64_t total = 0;
+    for (const SolveStats& s : st) {
+      count(s, changes_);
+      total += s.gathers;
+    }
+    if (seconds) {
+      const double spent = seconds_since(t0) * double(std::max(1, std::min(threads, int(n))));
+      seconds->resize(n);
+      for (size_t j = 0; j < n; ++j)
+        (*seconds)[j] =
+            total > 0 ? spent * double(st[j].gathers) / double(total) : spent / double(n);
+    }
+    return out;
   }
 
   float first_change(const GroupBounce& group, const std::vector<uint8_t>& present) const override {

@@ -43,6 +43,13 @@ struct FineSum {
   glm::vec3 at(size_t texel) const;
 };
 
+// One change for IndirectIntegrator::changes().
+struct ChangeRequest {
+  std::vector<uint8_t> present;  // one byte per Scene object
+  FineSum blocked;               // the direct light they block (fine)
+  FineSum blocked_points;        // the same at direct_points() (empty without them)
+};
+
 // Points where an integrator's bounce light reads the direct light itself instead of its cache
 // (final gathering: its near hits, gather.h NearHit), as an image so that a direct pass traces
 // them as it traces the light map: point i is pixel i, row by row. They are in space order, so
@@ -62,7 +69,7 @@ using PointLight = FloatImage;
 class IndirectIntegrator {
  public:
   virtual ~IndirectIntegrator() = default;
-  // The points whose direct light the group passes and states hand to prepare(), change() and
+  // The points whose direct light the group passes and states hand to prepare(), changes() and
   // add_state() (`points`), or null: none.
   virtual const DirectPoints* direct_points() const { return nullptr; }
   // The bounce light of a group's direct light (fine, 1 or 3 channels, the group's units).
@@ -70,14 +77,17 @@ class IndirectIntegrator {
   // `points`: the same light at direct_points() (null when it has none).
   virtual GroupBounce prepare(const FloatImage& direct, const PointLight* points,
                               float threshold) const = 0;
-  // What the objects `present` (one byte per Scene object) change in a prepared group's bounce
-  // light: I(no object) - I(present), given the direct light they block. Single-threaded: the
-  // caller runs changes in parallel.
-  // `blocked_points`: the same sum of the passes' point maps (empty without direct_points()).
-  virtual BounceMap change(const GroupBounce& group, const std::vector<uint8_t>& present,
-                           const FineSum& blocked, const FineSum& blocked_points,
-                           float threshold) const = 0;
-  // A cheap bound of the first bounce of change() for objects that block no direct light.
+  // What the objects of each request change in a prepared group's bounce light,
+  // I(no object) - I(present), given the direct light they block: for each request the map it
+  // would get alone. Solved together, `threads` wide, so that several share each pass over the
+  // integrator's rays. `seconds` (may be null): each request's share of the solve's thread-seconds
+  // (wall time x threads), by the work it took. `progress` (may be null) advances by each request
+  // solved.
+  virtual std::vector<BounceMap> changes(const GroupBounce& group,
+                                         const std::vector<ChangeRequest>& requests,
+                                         float threshold, int threads, std::vector<double>* seconds,
+                                         Progress* progress) const = 0;
+  // A cheap bound of the first bounce of a change for objects that block no direct light.
   virtual float first_change(const GroupBounce& group,
                              const std::vector<uint8_t>& present) const = 0;
   // Adds a bounce map to a fine map (3 channels) as light-map irradiance, magnified along each

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 
 #include "worker_pool.h"
 
@@ -10,7 +12,7 @@ namespace lightpatch::cooker {
 namespace {
 
 constexpr uint32_t kChunk = 256;  // receivers per work item
-// gather_into prefetches the rays of the receiver this far ahead.
+// gather_k prefetches the rays of the receiver this far ahead.
 constexpr size_t kPrefetchAhead = 8;
 
 float max3(const glm::vec3& v) {
@@ -128,14 +130,46 @@ PresentCrossings present_crossings(const GatherOperator& op, const std::vector<u
   return pc;
 }
 
-// out[c] = mean over the first rays of `level` of c's rays of src at what each ray hits with
-// `present` objects in place, for every receiver c (others untouched: the caller zeroes `out`).
-void gather_into(const GatherOperator& op, const PresentCrossings& present, const CoarseMap& src,
-                 const std::vector<uint32_t>& receivers, int threads, int level, CoarseMap& out) {
-  const bool objects = !present.offset.empty();
+// Up to this many solves share each bounce's pass over the stored rays (solve_changes): a ray's
+// hit reads all their sources from one or two cache lines, interleaved.
+constexpr size_t kBatch = kChangeBatch;
+static_assert(kBatch == 8, "gather_many has a gather_k for each batch size");
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "coarse maps are read as floats");
+
+// One source of a batched gather: what it reads, the rays its present objects change, its
+// receivers (ascending) and where its result goes.
+struct GatherJob {
+  const CoarseMap* src;
+  const PresentCrossings* present;
+  const std::vector<uint32_t>* receivers;
+  CoarseMap* out;
+};
+
+// Floats per coarse texel in a batched gather's sources: K RGB sources, padded to whole 4-float
+// vectors (one source is read where it is, unpadded).
+constexpr size_t stride_of(size_t k) {
+  return k == 1 ? 3 : (3 * k + 3) / 4 * 4;
+}
+
+// For K jobs, out[c] = mean over the first rays of `level` of c's rays of the job's source at what
+// each ray hits with its present objects in place. Sources interleaved in `src` (coarse c's K at
+// [stride_of(K) c, stride_of(K) (c+1))); visits the union of the jobs' receivers. A job's
+// receivers are all those whose rays of this level reach a non-zero texel of its source (object
+// hits included), so elsewhere its sum is exactly 0, what its own gather leaves there: each job
+// gets its own gather's bits (each lane of a vector adds as the scalar sum did).
+template <size_t K>
+void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
+              const std::vector<uint32_t>& receivers, int threads, int level) {
+  using V4 = float __attribute__((vector_size(16)));
+  constexpr size_t kStride = stride_of(K), kVectors = kStride / 4;
   const int n = op.level_rays[level];
   const std::vector<float>& weight = op.weight[level];
   const int items = int((receivers.size() + kChunk - 1) / kChunk);
+  auto at = [&](uint32_t c, size_t j) {
+    if (c == kNoTexel) return glm::vec3(0.0f);
+    const float* v = src + size_t(c) * kStride + 3 * j;
+    return glm::vec3(v[0], v[1], v[2]);
+  };
   parallel_for(items, threads, [&](int item) {
     const size_t end = std::min(receivers.size(), size_t(item + 1) * kChunk);
     for (size_t i = size_t(item) * kChunk; i < end; ++i) {
@@ -147,19 +181,105 @@ void gather_into(const GatherOperator& op, const PresentCrossings& present, cons
       }
       const uint32_t c = receivers[i];
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
-      glm::vec3 sum(0.0f);
-      for (int k = 0; k < n; ++k)
-        if (hits[k] != kNoTexel) sum += src[hits[k]];
-      if (objects) {
-        for (uint32_t r = present.offset[c]; r < present.offset[c + 1]; ++r) {
-          const PresentCrossings::Ray x = present.rays[r];
-          if (int(x.ray) >= n) break;  // in ray order
-          sum += at(src, x.coarse) - at(src, hits[x.ray]);
+      float sum[kStride < 4 ? 4 : kStride];
+      if constexpr (K == 1) {
+        glm::vec3 v(0.0f);
+        for (int k = 0; k < n; ++k)
+          if (hits[k] != kNoTexel) v += at(hits[k], 0);
+        sum[0] = v.x;
+        sum[1] = v.y;
+        sum[2] = v.z;
+      } else {
+        V4 acc[kVectors] = {};  // registers: the sum of every source at once
+        for (int k = 0; k < n; ++k) {
+          if (hits[k] == kNoTexel) continue;
+          const float* v = src + size_t(hits[k]) * kStride;
+#pragma GCC unroll 8
+          for (size_t q = 0; q < kVectors; ++q) {
+            V4 x;
+            std::memcpy(&x, v + 4 * q, sizeof x);
+            acc[q] += x;
+          }
         }
+        std::memcpy(sum, acc, sizeof acc);
       }
-      out[c] = sum * weight[c];
+      for (size_t j = 0; j < K; ++j) {
+        glm::vec3 v(sum[3 * j], sum[3 * j + 1], sum[3 * j + 2]);
+        const PresentCrossings& present = *jobs[j].present;
+        if (!present.offset.empty()) {
+          for (uint32_t r = present.offset[c]; r < present.offset[c + 1]; ++r) {
+            const PresentCrossings::Ray x = present.rays[r];
+            if (int(x.ray) >= n) break;  // in ray order
+            v += at(x.coarse, j) - at(hits[x.ray], j);
+          }
+        }
+        (*jobs[j].out)[c] = v * weight[c];
+      }
     }
   });
+}
+
+// Whether K jobs (at most kBatch) whose receivers number `visits` in all and `united` without
+// repeats cost less in one shared pass than in a pass each: a shared pass visits the union, each
+// receiver at about 1 + (K - 1) / 3 of one job's cost (one read of its rays, wider sums);
+// separate passes visit each job's own. Changes in one room share most receivers; in different
+// rooms a shared pass would sum K sources where each has one.
+bool share_pass(size_t k, size_t united, size_t visits) {
+  return k <= kBatch && united * (k + 2) <= 3 * visits;
+}
+
+// Every job's gather of `level` (gather_k), outputs untouched beyond their receivers (the caller
+// zeroes them). Jobs in order share a pass while share_pass() says so.
+void gather_many(const GatherOperator& op, const std::vector<GatherJob>& jobs, int threads,
+                 int level) {
+  const size_t nc = op.grid.size();
+  std::vector<float> mixed;
+  std::vector<uint8_t> mark;
+  std::vector<uint32_t> all;
+  for (size_t first = 0, end = 0; first < jobs.size(); first = end) {
+    end = first + 1;
+    size_t visits = jobs[first].receivers->size(), united = visits;
+    if (end < jobs.size()) {
+      mark.assign(nc, 0);
+      for (uint32_t c : *jobs[first].receivers) mark[c] = 1;
+    }
+    for (; end < jobs.size(); ++end) {
+      const std::vector<uint32_t>& r = *jobs[end].receivers;
+      size_t fresh = 0;
+      for (uint32_t c : r) fresh += mark[c] ? 0 : 1;
+      if (!share_pass(end - first + 1, united + fresh, visits + r.size())) break;
+      for (uint32_t c : r) mark[c] = 1;
+      united += fresh;
+      visits += r.size();
+    }
+    const size_t k = end - first;
+    const GatherJob* batch = jobs.data() + first;
+    const std::vector<uint32_t>* receivers = batch[0].receivers;
+    const float* src = reinterpret_cast<const float*>(batch[0].src->data());
+    if (k > 1) {
+      all.clear();
+      for (uint32_t c = 0; c < nc; ++c)
+        if (mark[c]) all.push_back(c);
+      receivers = &all;
+      const size_t stride = stride_of(k);
+      mixed.assign(nc * stride, 0.0f);
+      for (size_t j = 0; j < k; ++j) {
+        const CoarseMap& m = *batch[j].src;
+        for (size_t c = 0; c < nc; ++c) {
+          float* v = mixed.data() + c * stride + 3 * j;
+          v[0] = m[c].x;
+          v[1] = m[c].y;
+          v[2] = m[c].z;
+        }
+      }
+      src = mixed.data();
+    }
+    using Gather = void (*)(const GatherOperator&, const float*, const GatherJob*,
+                            const std::vector<uint32_t>&, int, int);
+    static constexpr Gather kGather[kBatch] = {gather_k<1>, gather_k<2>, gather_k<3>, gather_k<4>,
+                                               gather_k<5>, gather_k<6>, gather_k<7>, gather_k<8>};
+    kGather[k - 1](op, src, batch, *receivers, threads, level);
+  }
 }
 
 // The near hits' first bounce: each reads `near` (its own point's source) instead of `src` at the
@@ -205,40 +325,76 @@ glm::vec3 crossing_change(const GatherOperator& op, const PresentCrossings& pres
   return sum * op.weight[level][c];
 }
 
-// Runs a Neumann series: bounce b gathers albedo * term b-1 through the rays of its level, plus
-// `extra[b]` (a change's crossing terms) where given. Returns its terms: the first, the second and
-// the rest summed.
-Bounces run_series(const GatherOperator& op, const PresentCrossings& present, CoarseMap first,
-                   const CoarseMap* extra_second, const CoarseMap* extra_rest,
-                   const SolveOptions& options, SolveStats* stats) {
+// One Neumann series for run_series: bounce b gathers albedo * term b-1 through the rays of its
+// level, plus `extra[b]` (a change's crossing terms) where given.
+struct Series {
+  const PresentCrossings* present = nullptr;
+  CoarseMap first;  // the first bounce
+  const CoarseMap* extra_second = nullptr;
+  const CoarseMap* extra_rest = nullptr;
+  SolveStats* stats = nullptr;
+  Bounces out;  // its terms: the first, the second and the rest summed
+};
+
+// Runs the series side by side, bounce by bounce, each bounce's gathers in one gather_many; a
+// series stops when its term is pruned to nothing and no extra is left.
+void run_series(const GatherOperator& op, std::vector<Series>& series,
+                const SolveOptions& options) {
   const CoarseGrid& g = op.grid;
-  const size_t nc = first.size();
-  Bounces out;
-  out.second.assign(nc, glm::vec3(0.0f));
-  out.rest.assign(nc, glm::vec3(0.0f));
-  CoarseMap delta = first;
-  out.first = std::move(first);
-  if (stats) stats->bounces = 1;
-  for (int b = 1; b < options.max_bounces; ++b) {
-    const CoarseMap* extra = b == 1 ? extra_second : b == 2 ? extra_rest : nullptr;
-    const bool any = prune(delta, options.tolerance);
-    if (!any && !extra) break;
-    for (size_t c = 0; c < nc; ++c) delta[c] *= g.albedo[c];
-    CoarseMap next(nc, glm::vec3(0.0f));
-    if (any) {
-      const int level = GatherOperator::level_of(b);
-      const std::vector<uint32_t> receivers = receivers_of(op, delta, options.reach, level);
-      gather_into(op, present, delta, receivers, options.threads, level, next);
-      if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.level_rays[level]);
-    }
-    if (extra)
-      for (size_t c = 0; c < nc; ++c) next[c] += (*extra)[c];
-    CoarseMap& sum = b == 1 ? out.second : out.rest;
-    for (size_t c = 0; c < nc; ++c) sum[c] += next[c];
-    if (stats) stats->bounces = b + 1;
-    delta.swap(next);
+  const size_t nc = g.size(), n = series.size();
+  std::vector<CoarseMap> delta(n), next(n);
+  std::vector<std::vector<uint32_t>> receivers(n);
+  std::vector<uint8_t> running(n, 1), gathers(n, 0);
+  for (size_t j = 0; j < n; ++j) {
+    Series& s = series[j];
+    s.out.second.assign(nc, glm::vec3(0.0f));
+    s.out.rest.assign(nc, glm::vec3(0.0f));
+    delta[j] = s.first;
+    s.out.first = std::move(s.first);
+    if (s.stats) s.stats->bounces = 1;
   }
-  return out;
+  const int jobs_threads = std::min(options.threads, int(n));
+  for (int b = 1; b < options.max_bounces; ++b) {
+    const int level = GatherOperator::level_of(b);
+    auto extra_of = [&](const Series& s) {
+      return b == 1 ? s.extra_second : b == 2 ? s.extra_rest : nullptr;
+    };
+    parallel_for(int(n), jobs_threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      gathers[j] = 0;
+      if (!running[j]) return;
+      const bool any = prune(delta[j], options.tolerance);
+      if (!any && !extra_of(series[j])) {
+        running[j] = 0;
+        return;
+      }
+      for (size_t c = 0; c < nc; ++c) delta[j][c] *= g.albedo[c];
+      next[j].assign(nc, glm::vec3(0.0f));
+      if (any) {
+        receivers[j] = receivers_of(op, delta[j], options.reach, level);
+        gathers[j] = 1;
+        if (series[j].stats)
+          series[j].stats->gathers +=
+              uint64_t(receivers[j].size()) * uint64_t(op.level_rays[level]);
+      }
+    });
+    std::vector<GatherJob> jobs;
+    for (size_t j = 0; j < n; ++j)
+      if (gathers[j]) jobs.push_back({&delta[j], series[j].present, &receivers[j], &next[j]});
+    if (std::find(running.begin(), running.end(), uint8_t(1)) == running.end()) break;
+    gather_many(op, jobs, options.threads, level);
+    parallel_for(int(n), jobs_threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      if (!running[j]) return;
+      Series& s = series[j];
+      if (const CoarseMap* extra = extra_of(s))
+        for (size_t c = 0; c < nc; ++c) next[j][c] += (*extra)[c];
+      CoarseMap& sum = b == 1 ? s.out.second : s.out.rest;
+      for (size_t c = 0; c < nc; ++c) sum[c] += next[j][c];
+      if (s.stats) s.stats->bounces = b + 1;
+      delta[j].swap(next[j]);
+    });
+  }
 }
 
 }  // namespace
@@ -348,11 +504,16 @@ Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& pre
                        const NearSource* near) {
   const PresentCrossings crossings = present_crossings(op, present);
   const std::vector<uint32_t> receivers = receivers_of(op, source, options.reach, 0);
-  CoarseMap first(source.size(), glm::vec3(0.0f));
-  gather_into(op, crossings, source, receivers, options.threads, 0, first);
-  if (near) add_near(op, *options.near, source, *near, first);
+  std::vector<Series> series(1);
+  Series& s = series[0];
+  s.present = &crossings;
+  s.stats = stats;
+  s.first.assign(source.size(), glm::vec3(0.0f));
+  gather_many(op, {{&source, &crossings, &receivers, &s.first}}, options.threads, 0);
+  if (near) add_near(op, *options.near, source, *near, s.first);
   if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  return run_series(op, crossings, std::move(first), nullptr, nullptr, options, stats);
+  run_series(op, series, options);
+  return std::move(s.out);
 }
 
 EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
@@ -368,29 +529,105 @@ EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
   return e;
 }
 
+std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadiance& empty,
+                                     const std::vector<ChangeJob>& jobs,
+                                     const SolveOptions& options, std::vector<SolveStats>* stats,
+                                     const std::function<void(size_t)>& done) {
+  const size_t nc = op.grid.size(), n = jobs.size();
+  if (stats) stats->assign(n, SolveStats{});
+  // Each term of I(present) reads through its rays what the previous term sends on; where a ray
+  // now ends on an object, what the static hit sent in the empty series (the same term) is
+  // replaced by what the object sends: the crossing terms, one per level.
+  std::vector<PresentCrossings> crossings(n);
+  std::vector<std::vector<uint32_t>> receivers(n);
+  parallel_for(int(n), options.threads, [&](int jj) {
+    const size_t j = size_t(jj);
+    crossings[j] = present_crossings(op, *jobs[j].present);
+    // The blocked direct light reaches only the receivers whose rays can see it (rays that now
+    // end on an object included: their tiles are among each tile's sources).
+    receivers[j] = receivers_of(op, jobs[j].direct_change, options.reach, 0);
+  });
+  // Batches of jobs whose first bounces share a pass (share_pass), each job with the later ones
+  // of the next few not yet taken; the batches are solved in parallel, each series in lockstep.
+  constexpr size_t kLookAhead = 4 * kBatch;
+  std::vector<std::vector<size_t>> batches;
+  std::vector<uint8_t> taken(n, 0), mark;
+  for (size_t j = 0; j < n; ++j) {
+    if (taken[j]) continue;
+    std::vector<size_t> batch = {j};
+    taken[j] = 1;
+    size_t visits = receivers[j].size(), united = visits;
+    mark.assign(nc, 0);
+    for (uint32_t c : receivers[j]) mark[c] = 1;
+    for (size_t i = j + 1, seen = 0; i < n && seen < kLookAhead && batch.size() < kBatch; ++i) {
+      if (taken[i]) continue;
+      ++seen;
+      size_t fresh = 0;
+      for (uint32_t c : receivers[i]) fresh += mark[c] ? 0 : 1;
+      if (!share_pass(batch.size() + 1, united + fresh, visits + receivers[i].size())) continue;
+      for (uint32_t c : receivers[i]) mark[c] = 1;
+      united += fresh;
+      visits += receivers[i].size();
+      batch.push_back(i);
+      taken[i] = 1;
+    }
+    batches.push_back(std::move(batch));
+  }
+  // Batches in parallel, each on one thread; a single batch gets them all.
+  SolveOptions inner = options;
+  inner.threads = batches.size() > 1 ? 1 : options.threads;
+  std::vector<CoarseMap> out(n);
+  parallel_for(int(batches.size()), options.threads, [&](int bi) {
+    const std::vector<size_t>& batch = batches[size_t(bi)];
+    const size_t k = batch.size();
+    std::vector<Series> series(k);
+    std::vector<CoarseMap> second(k), rest(k);
+    std::vector<GatherJob> gather(k);
+    for (size_t i = 0; i < k; ++i) {
+      const size_t j = batch[i];
+      series[i].first.assign(nc, glm::vec3(0.0f));
+      gather[i] = {&jobs[j].direct_change, &crossings[j], &receivers[j], &series[i].first};
+    }
+    gather_many(op, gather, inner.threads, 0);
+    for (size_t i = 0; i < k; ++i) {
+      const size_t j = batch[i];
+      Series& s = series[i];
+      if (jobs[j].near_change)
+        add_near(op, *options.near, jobs[j].direct_change, *jobs[j].near_change, s.first);
+      second[i].assign(nc, glm::vec3(0.0f));
+      rest[i].assign(nc, glm::vec3(0.0f));
+      for (uint32_t c : crossings[j].receivers) {
+        s.first[c] += crossing_change(op, crossings[j], empty.direct, 0, c);
+        second[i][c] += crossing_change(op, crossings[j], empty.first, 1, c);
+        rest[i][c] += crossing_change(op, crossings[j], empty.later, 2, c);
+      }
+      s.present = &crossings[j];
+      s.extra_second = &second[i];
+      s.extra_rest = &rest[i];
+      if (stats) {
+        s.stats = &(*stats)[j];
+        s.stats->gathers += uint64_t(receivers[j].size()) * uint64_t(op.rays);
+      }
+    }
+    run_series(op, series, inner);
+    for (size_t i = 0; i < k; ++i) out[batch[i]] = series[i].out.total();
+    if (done) done(k);
+  });
+  return out;
+}
+
 CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const EmptyRadiance& empty, const CoarseMap& direct_change,
                        const SolveOptions& options, SolveStats* stats,
                        const NearSource* near_change) {
-  const size_t nc = op.grid.size();
-  // Each term of I(present) reads through its rays what the previous term sends on; where a ray
-  // now ends on an object, what the static hit sent in the empty series (the same term) is
-  // replaced by what the object sends: the crossing terms, one per level.
-  const PresentCrossings crossings = present_crossings(op, present);
-  CoarseMap second(nc, glm::vec3(0.0f)), rest(nc, glm::vec3(0.0f));
-  CoarseMap first(nc, glm::vec3(0.0f));
-  // The blocked direct light reaches only the receivers whose rays can see it (rays that now end
-  // on an object included: their tiles are among each tile's sources).
-  const std::vector<uint32_t> receivers = receivers_of(op, direct_change, options.reach, 0);
-  gather_into(op, crossings, direct_change, receivers, options.threads, 0, first);
-  if (near_change) add_near(op, *options.near, direct_change, *near_change, first);
-  if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  for (uint32_t c : crossings.receivers) {
-    first[c] += crossing_change(op, crossings, empty.direct, 0, c);
-    second[c] += crossing_change(op, crossings, empty.first, 1, c);
-    rest[c] += crossing_change(op, crossings, empty.later, 2, c);
+  std::vector<SolveStats> st;
+  CoarseMap out = std::move(
+      solve_changes(op, empty, {{&present, direct_change, near_change}}, options, &st)[0]);
+  if (stats) {
+    stats->bounces = st[0].bounces;
+    stats->gathers += st[0].gathers;
   }
-  return run_series(op, crossings, std::move(first), &second, &rest, options, stats).total();
+  return out;
 }
 
 float first_change_peak(const GatherOperator& op, const std::vector<uint8_t>& present,

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "indirect/gather.h"
@@ -112,6 +113,27 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
                        const EmptyRadiance& empty, const CoarseMap& direct_change,
                        const SolveOptions& options, SolveStats* stats = nullptr,
                        const NearSource* near_change = nullptr);
+
+// The most changes solve_changes() solves side by side.
+constexpr size_t kChangeBatch = 8;
+
+// One change for solve_changes(): solve_change()'s arguments.
+struct ChangeJob {
+  const std::vector<uint8_t>* present = nullptr;
+  CoarseMap direct_change;
+  const NearSource* near_change = nullptr;
+};
+
+// solve_change() of every job, the same bits as each solved alone, `options.threads` wide. Jobs
+// whose receivers overlap enough are solved side by side, up to kChangeBatch, each bounce's
+// gathers sharing one pass over the stored rays (a pass per job read them once for each); such
+// batches run in parallel. `stats` (may be null) receives one entry per job; `done` (may be
+// empty) is called with the number of jobs each batch finished, from the thread that solved it.
+std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadiance& empty,
+                                     const std::vector<ChangeJob>& jobs,
+                                     const SolveOptions& options,
+                                     std::vector<SolveStats>* stats = nullptr,
+                                     const std::function<void(size_t)>& done = {});
 
 // The largest first-order change that objects `present` make where they block no direct light:
 // per receiver, what its rays that now end on them saw before against what they see now. A cheap
