@@ -146,26 +146,14 @@ class EmbreeTracer final : public Tracer {
 
   Hit intersect(const glm::vec3& origin, const glm::vec3& dir, float tmin, float tmax,
                 bool with_objects) const override {
-    Hit hit;
-    if (!(tmax > tmin)) return hit;
-    count_ray();
-    QueryContext qc;
-    init_context(qc, with_objects ? (kStaticMask | kObjectMask) : kStaticMask);
-    RTCRayHit rh;
-    set_ray(rh.ray, origin, dir, tmin, tmax, qc.accept);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;  // geomID names the mesh (see build())
-    rtcIntersect1(scene_, &qc.ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-    hit.hit = true;
-    hit.t = rh.ray.tfar;
-    hit.mesh = static_cast<int>(rh.hit.geomID);
-    hit.triangle = static_cast<int>(rh.hit.primID);
-    hit.u = rh.hit.u;
-    hit.v = rh.hit.v;
-    hit.geometric_normal = triangle_normal(hit.mesh, hit.triangle);
-    return hit;
+    return intersect_one(scene_, origin, dir, tmin, tmax,
+                         with_objects ? (kStaticMask | kObjectMask) : kStaticMask);
+  }
+
+  Hit intersect_objects(const glm::vec3& origin, const glm::vec3& dir, float tmin,
+                        float tmax) const override {
+    if (!objects_) return Hit{};
+    return intersect_one(objects_, origin, dir, tmin, tmax, kObjectMask);
   }
 
   bool occluded_static(const glm::vec3& origin, const glm::vec3& dir, float tmin,
@@ -225,9 +213,21 @@ class EmbreeTracer final : public Tracer {
 
   void intersect_many(const Ray* rays, int n, Hit* hits, bool with_objects) const override {
     const unsigned accept = with_objects ? (kStaticMask | kObjectMask) : kStaticMask;
-    if (packet_width_ == 16) return intersect_packets<16>(rays, n, hits, accept);
-    if (packet_width_ == 8) return intersect_packets<8>(rays, n, hits, accept);
-    intersect_packets<4>(rays, n, hits, accept);
+    intersect_batch(scene_, rays, n, hits, accept);
+  }
+
+  void intersect_objects_many(const Ray* rays, int n, Hit* hits) const override {
+    if (!objects_) {
+      std::fill(hits, hits + n, Hit{});
+      return;
+    }
+    intersect_batch(objects_, rays, n, hits, kObjectMask);
+  }
+
+  void intersect_batch(RTCScene scene, const Ray* rays, int n, Hit* hits, unsigned accept) const {
+    if (packet_width_ == 16) return intersect_packets<16>(scene, rays, n, hits, accept);
+    if (packet_width_ == 8) return intersect_packets<8>(scene, rays, n, hits, accept);
+    intersect_packets<4>(scene, rays, n, hits, accept);
   }
 
   void occluded_static_many(const Ray* rays, int n, uint8_t* blocked) const override {
@@ -437,7 +437,7 @@ class EmbreeTracer final : public Tracer {
   // Packets of W lanes over the batch; the last one partly valid. Lanes of empty segments stay
   // invalid and answer "no hit".
   template <int W>
-  void intersect_packets(const Ray* rays, int n, Hit* hits, unsigned accept) const {
+  void intersect_packets(RTCScene scene, const Ray* rays, int n, Hit* hits, unsigned accept) const {
     QueryContext qc;
     init_context(qc, accept);
     for (int first = 0; first < n; first += W) {
@@ -453,8 +453,8 @@ class EmbreeTracer final : public Tracer {
         live += valid[i] != 0 ? 1 : 0;
       }
       if (live > 0) {
-        count_rays(static_cast<uint64_t>(live));
-        Packet<W>::intersect(valid, scene_, &qc.ctx, &rh);
+        if (scene != objects_) count_rays(static_cast<uint64_t>(live));
+        Packet<W>::intersect(valid, scene, &qc.ctx, &rh);
       }
       // The hit triangles' indices, fetched for every lane before any normal is computed.
       for (int i = 0; i < m; ++i) {
@@ -497,6 +497,30 @@ class EmbreeTracer final : public Tracer {
         blocked[first + i] = (valid[i] != 0 && ray.tfar[i] < 0.0f) ? 1 : 0;  // -inf on a hit
       }
     }
+  }
+
+  Hit intersect_one(RTCScene scene, const glm::vec3& origin, const glm::vec3& dir, float tmin,
+                    float tmax, unsigned accept) const {
+    Hit hit;
+    if (!(tmax > tmin)) return hit;
+    if (scene != objects_) count_ray();
+    QueryContext qc;
+    init_context(qc, accept);
+    RTCRayHit rh;
+    set_ray(rh.ray, origin, dir, tmin, tmax, qc.accept);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;  // geomID names the mesh (see build())
+    rtcIntersect1(scene, &qc.ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.hit = true;
+    hit.t = rh.ray.tfar;
+    hit.mesh = static_cast<int>(rh.hit.geomID);
+    hit.triangle = static_cast<int>(rh.hit.primID);
+    hit.u = rh.hit.u;
+    hit.v = rh.hit.v;
+    hit.geometric_normal = triangle_normal(hit.mesh, hit.triangle);
+    return hit;
   }
 
   bool static_blocks(const glm::vec3& origin, const glm::vec3& dir, float tmin, float tmax) const {

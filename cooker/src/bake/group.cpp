@@ -182,24 +182,32 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
       out.shadows.push_back({light_index, object, std::move(map), std::move(blocks)});
     return true;
   };
-  for (size_t j = 0; j < cand.sets.size(); ++j) {
-    FloatImage map = dp.shadow[j].dense(), blocks;
-    if (bounce) ind->add(change[j], map, &blocks);
-    kept[j] = keep_map(cand.objects[j], std::move(map), std::move(blocks), DecisionStage::kTraced,
-                       is_static ? "change" : "shadow")
+  // The maps are made in parallel (denoised and magnified bounce changes), then decided in order.
+  const size_t slots = cand.sets.size(), n_only = lg.bounce_only.size();
+  std::vector<FloatImage> maps(slots + n_only), blocks(slots + n_only);
+  parallel_for(int(slots + n_only), b.threads, [&](int i) {
+    const size_t j = size_t(i);
+    if (j < slots) {
+      maps[j] = dp.shadow[j].dense();
+      if (bounce) ind->add(change[j], maps[j], &blocks[j]);
+    } else if (!only[j - slots].empty()) {
+      maps[j] = FloatImage(w, h, 3);
+      ind->add(std::move(only[j - slots]), maps[j], &blocks[j]);
+    }
+  });
+  for (size_t j = 0; j < slots; ++j)
+    kept[j] = keep_map(cand.objects[j], std::move(maps[j]), std::move(blocks[j]),
+                       DecisionStage::kTraced, is_static ? "change" : "shadow")
                   ? 1
                   : 0;
-  }
-  for (size_t q = 0; q < lg.bounce_only.size(); ++q) {
-    if (only[q].empty()) {
+  for (size_t q = 0; q < n_only; ++q) {
+    if (maps[slots + q].data.empty()) {
       decide(kind, DecisionStage::kPlan, lg.bounce_only[q], -1, false,
              lg.bounce_only_why[q] + "; bounce: " + only_reason[q]);
       continue;
     }
-    FloatImage map(w, h, 3), blocks;
-    ind->add(std::move(only[q]), map, &blocks);
-    keep_map(lg.bounce_only[q], std::move(map), std::move(blocks), DecisionStage::kBounce,
-             "bounce change");
+    keep_map(lg.bounce_only[q], std::move(maps[slots + q]), std::move(blocks[slots + q]),
+             DecisionStage::kBounce, "bounce change");
   }
 
   // Overlaps: where two objects block the same rays, S_a + S_b removes that light twice; the
@@ -258,14 +266,15 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
     const std::vector<BounceMap> joint =
         ind->changes(gb, requests, lg.threshold, b.threads, nullptr, &progress);
     progress.end();
-    for (size_t i = 0; i < corrections.size(); ++i) {
+    parallel_for(int(corrections.size()), b.threads, [&](int ii) {
+      const size_t i = size_t(ii);
       const auto [sa, sb] = kept_pairs[i];
       const BounceMap& ab = joint[i];
       BounceMap p(ab.size());
       for (size_t c = 0; c < p.size(); ++c)
         p[c] = change[size_t(sa)][c] + change[size_t(sb)][c] - ab[c];
       ind->add(std::move(p), corrections[i].map, &corrections[i].indirect);
-    }
+    });
   }
   for (PairCorrectionMap& pc : corrections) out.pair_corrections.push_back(std::move(pc));
   // Triple overlaps (three objects blocking one ray) are not corrected: the decision says how

@@ -88,10 +88,20 @@ class Tracer {
       blocked[i] = intersect(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax, true).hit;
     }
   }
+  // Closest hit on a semi-dynamic object along the segment; static geometry takes no part. These
+  // queries walk the objects' own small BVH and are not counted in rays_traced(), which would
+  // otherwise flatter the cook's ray rate.
+  virtual Hit intersect_objects(const glm::vec3& origin, const glm::vec3& dir, float tmin,
+                                float tmax) const = 0;
+  virtual void intersect_objects_many(const Ray* rays, int n, Hit* hits) const {
+    for (int i = 0; i < n; ++i)
+      hits[i] = intersect_objects(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax);
+  }
   // Rays a batch query traces together (its packet width): batches of a multiple of it waste no
   // lanes.
   virtual int batch_width() const { return 1; }
-  // Rays traced so far by every query (each ray of a batch counts once), over all threads.
+  // Rays traced so far by every query (each ray of a batch counts once), over all threads; object-
+  // only intersections (intersect_objects) not counted.
   virtual uint64_t rays_traced() const = 0;
 };
 
