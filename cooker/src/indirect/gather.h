@@ -1,8 +1,9 @@
 // Final gathering for indirect light (the production integrator). Indirect light is smooth, so it
 // is computed on coarse texels: the texels of one chart in one k x k block of the light map (k =
 // the indirect level: 1, 2, 4 or 8), split further where normals differ. From every coarse texel
-// N cosine-distributed rays leave its member texels; each is traced once, with the semi-dynamic
-// objects, and what it hits is kept as a coarse texel index (the radiance cache is the light map
+// N cosine-distributed rays leave its member texels; each is traced once through static geometry
+// and once through the semi-dynamic objects alone, up to its static hit (the objects it crosses
+// and where), and what it hits is kept as a coarse texel index (the radiance cache is the light map
 // itself, at the coarse level). Bounce light of any light group and any set of present objects is
 // then a sum of sparse gathers over those stored rays, with no more tracing:
 //
@@ -11,7 +12,7 @@
 // solved as a Neumann series (bounce by bounce). With objects present a ray ends at the first
 // present object it crosses instead of its static hit; the rays that cross objects are few and
 // kept apart, so an object's change to a group's bounce light is a sparse correction of the same
-// sums (indirect_solve.h). Every step is linear in the light and uses the same rays, so a
+// sums (solve.h). Every step is linear in the light and uses the same rays, so a
 // recomposed state equals bake_state of that state to rounding.
 #pragma once
 
