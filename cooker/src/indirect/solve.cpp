@@ -326,12 +326,12 @@ glm::vec3 crossing_change(const GatherOperator& op, const PresentCrossings& pres
 }
 
 // One Neumann series for run_series: bounce b gathers albedo * term b-1 through the rays of its
-// level, plus `extra[b]` (a change's crossing terms) where given.
+// level, plus `extra[b]` (a change's crossing terms) where not empty. Each map is freed once read:
+// eight changes side by side, two batches at once, hold sixteen series.
 struct Series {
   const PresentCrossings* present = nullptr;
   CoarseMap first;  // the first bounce
-  const CoarseMap* extra_second = nullptr;
-  const CoarseMap* extra_rest = nullptr;
+  CoarseMap extra_second, extra_rest;
   SolveStats* stats = nullptr;
   Bounces out;  // its terms: the first, the second and the rest summed
 };
@@ -356,8 +356,9 @@ void run_series(const GatherOperator& op, std::vector<Series>& series,
   const int jobs_threads = std::min(options.threads, int(n));
   for (int b = 1; b < options.max_bounces; ++b) {
     const int level = GatherOperator::level_of(b);
-    auto extra_of = [&](const Series& s) {
-      return b == 1 ? s.extra_second : b == 2 ? s.extra_rest : nullptr;
+    auto extra_of = [&](Series& s) -> CoarseMap* {
+      CoarseMap* e = b == 1 ? &s.extra_second : b == 2 ? &s.extra_rest : nullptr;
+      return e && !e->empty() ? e : nullptr;
     };
     parallel_for(int(n), jobs_threads, [&](int jj) {
       const size_t j = size_t(jj);
@@ -366,6 +367,8 @@ void run_series(const GatherOperator& op, std::vector<Series>& series,
       const bool any = prune(delta[j], options.tolerance);
       if (!any && !extra_of(series[j])) {
         running[j] = 0;
+        CoarseMap().swap(delta[j]);
+        CoarseMap().swap(next[j]);
         return;
       }
       for (size_t c = 0; c < nc; ++c) delta[j][c] *= g.albedo[c];
@@ -387,8 +390,10 @@ void run_series(const GatherOperator& op, std::vector<Series>& series,
       const size_t j = size_t(jj);
       if (!running[j]) return;
       Series& s = series[j];
-      if (const CoarseMap* extra = extra_of(s))
+      if (CoarseMap* extra = extra_of(s)) {
         for (size_t c = 0; c < nc; ++c) next[j][c] += (*extra)[c];
+        CoarseMap().swap(*extra);
+      }
       CoarseMap& sum = b == 1 ? s.out.second : s.out.rest;
       for (size_t c = 0; c < nc; ++c) sum[c] += next[j][c];
       if (s.stats) s.stats->bounces = b + 1;
@@ -581,7 +586,6 @@ std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadian
     const std::vector<size_t>& batch = batches[size_t(bi)];
     const size_t k = batch.size();
     std::vector<Series> series(k);
-    std::vector<CoarseMap> second(k), rest(k);
     std::vector<GatherJob> gather(k);
     for (size_t i = 0; i < k; ++i) {
       const size_t j = batch[i];
@@ -594,23 +598,24 @@ std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadian
       Series& s = series[i];
       if (jobs[j].near_change)
         add_near(op, *options.near, jobs[j].direct_change, *jobs[j].near_change, s.first);
-      second[i].assign(nc, glm::vec3(0.0f));
-      rest[i].assign(nc, glm::vec3(0.0f));
+      s.extra_second.assign(nc, glm::vec3(0.0f));
+      s.extra_rest.assign(nc, glm::vec3(0.0f));
       for (uint32_t c : crossings[j].receivers) {
         s.first[c] += crossing_change(op, crossings[j], empty.direct, 0, c);
-        second[i][c] += crossing_change(op, crossings[j], empty.first, 1, c);
-        rest[i][c] += crossing_change(op, crossings[j], empty.later, 2, c);
+        s.extra_second[c] += crossing_change(op, crossings[j], empty.first, 1, c);
+        s.extra_rest[c] += crossing_change(op, crossings[j], empty.later, 2, c);
       }
       s.present = &crossings[j];
-      s.extra_second = &second[i];
-      s.extra_rest = &rest[i];
       if (stats) {
         s.stats = &(*stats)[j];
         s.stats->gathers += uint64_t(receivers[j].size()) * uint64_t(op.rays);
       }
     }
     run_series(op, series, inner);
-    for (size_t i = 0; i < k; ++i) out[batch[i]] = series[i].out.total();
+    for (size_t i = 0; i < k; ++i) {
+      out[batch[i]] = series[i].out.total();
+      series[i].out = Bounces{};
+    }
     if (done) done(k);
   });
   return out;
