@@ -554,7 +554,7 @@ std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadian
   });
   // Batches of jobs whose first bounces share a pass (share_pass), each job with the later ones
   // of the next few not yet taken; the batches are solved in parallel, each series in lockstep.
-  constexpr size_t kLookAhead = 4 * kBatch;
+  constexpr size_t kLookAhead = kBatch;  // each look reads a job's receivers
   std::vector<std::vector<size_t>> batches;
   std::vector<uint8_t> taken(n, 0), mark;
   for (size_t j = 0; j < n; ++j) {
