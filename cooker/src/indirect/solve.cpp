@@ -134,7 +134,6 @@ PresentCrossings present_crossings(const GatherOperator& op, const std::vector<u
 // hit reads all their sources from one or two cache lines, interleaved.
 constexpr size_t kBatch = kChangeBatch;
 static_assert(kBatch == 8, "gather_many has a gather_k for each batch size");
-static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "coarse maps are read as floats");
 
 // One source of a batched gather: what it reads, the rays its present objects change, its
 // receivers (ascending) and where its result goes.
@@ -145,10 +144,9 @@ struct GatherJob {
   CoarseMap* out;
 };
 
-// Floats per coarse texel in a batched gather's sources: K RGB sources, padded to whole 4-float
-// vectors (one source is read where it is, unpadded).
+// Floats per coarse texel in a gather's sources: K RGB sources, padded to whole 4-float vectors.
 constexpr size_t stride_of(size_t k) {
-  return k == 1 ? 3 : (3 * k + 3) / 4 * 4;
+  return (3 * k + 3) / 4 * 4;
 }
 
 // For K jobs, out[c] = mean over the first rays of `level` of c's rays of the job's source at what
@@ -181,28 +179,19 @@ void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
       }
       const uint32_t c = receivers[i];
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
-      float sum[kStride < 4 ? 4 : kStride];
-      if constexpr (K == 1) {
-        glm::vec3 v(0.0f);
-        for (int k = 0; k < n; ++k)
-          if (hits[k] != kNoTexel) v += at(hits[k], 0);
-        sum[0] = v.x;
-        sum[1] = v.y;
-        sum[2] = v.z;
-      } else {
-        V4 acc[kVectors] = {};  // registers: the sum of every source at once
-        for (int k = 0; k < n; ++k) {
-          if (hits[k] == kNoTexel) continue;
-          const float* v = src + size_t(hits[k]) * kStride;
+      V4 acc[kVectors] = {};  // registers: the sum of every source at once
+      for (int k = 0; k < n; ++k) {
+        if (hits[k] == kNoTexel) continue;
+        const float* v = src + size_t(hits[k]) * kStride;
 #pragma GCC unroll 8
-          for (size_t q = 0; q < kVectors; ++q) {
-            V4 x;
-            std::memcpy(&x, v + 4 * q, sizeof x);
-            acc[q] += x;
-          }
+        for (size_t q = 0; q < kVectors; ++q) {
+          V4 x;
+          std::memcpy(&x, v + 4 * q, sizeof x);
+          acc[q] += x;
         }
-        std::memcpy(sum, acc, sizeof acc);
       }
+      float sum[kStride];
+      std::memcpy(sum, acc, sizeof acc);
       for (size_t j = 0; j < K; ++j) {
         glm::vec3 v(sum[3 * j], sum[3 * j + 1], sum[3 * j + 2]);
         const PresentCrossings& present = *jobs[j].present;
@@ -255,25 +244,25 @@ void gather_many(const GatherOperator& op, const std::vector<GatherJob>& jobs, i
     const size_t k = end - first;
     const GatherJob* batch = jobs.data() + first;
     const std::vector<uint32_t>* receivers = batch[0].receivers;
-    const float* src = reinterpret_cast<const float*>(batch[0].src->data());
     if (k > 1) {
       all.clear();
       for (uint32_t c = 0; c < nc; ++c)
         if (mark[c]) all.push_back(c);
       receivers = &all;
-      const size_t stride = stride_of(k);
-      mixed.assign(nc * stride, 0.0f);
-      for (size_t j = 0; j < k; ++j) {
-        const CoarseMap& m = *batch[j].src;
-        for (size_t c = 0; c < nc; ++c) {
-          float* v = mixed.data() + c * stride + 3 * j;
-          v[0] = m[c].x;
-          v[1] = m[c].y;
-          v[2] = m[c].z;
-        }
-      }
-      src = mixed.data();
     }
+    // Sources interleaved and padded, so that a ray's hit reads them in whole vectors.
+    const size_t stride = stride_of(k);
+    mixed.assign(nc * stride, 0.0f);
+    for (size_t j = 0; j < k; ++j) {
+      const CoarseMap& m = *batch[j].src;
+      for (size_t c = 0; c < nc; ++c) {
+        float* v = mixed.data() + c * stride + 3 * j;
+        v[0] = m[c].x;
+        v[1] = m[c].y;
+        v[2] = m[c].z;
+      }
+    }
+    const float* src = mixed.data();
     using Gather = void (*)(const GatherOperator&, const float*, const GatherJob*,
                             const std::vector<uint32_t>&, int, int);
     static constexpr Gather kGather[kBatch] = {gather_k<1>, gather_k<2>, gather_k<3>, gather_k<4>,
