@@ -113,7 +113,7 @@ std::vector<uint32_t> crossing_receivers(const GatherOperator& op,
 
 PresentCrossings present_crossings(const GatherOperator& op, const std::vector<uint8_t>& present) {
   PresentCrossings pc;
-  if (std::find(present.begin(), present.end(), uint8_t(1)) == present.end()) return pc;
+  if (std::none_of(present.begin(), present.end(), [](uint8_t p) { return p != 0; })) return pc;
   const size_t nc = op.grid.size();
   pc.offset.assign(nc + 1, 0);
   pc.receivers = crossing_receivers(op, present);
@@ -208,46 +208,73 @@ void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
   });
 }
 
-// Whether K jobs (at most kBatch) whose receivers number `visits` in all and `united` without
-// repeats cost less in one shared pass than in a pass each: a shared pass visits the union, each
-// receiver at about 1 + (K - 1) / 3 of one job's cost (one read of its rays, wider sums);
-// separate passes visit each job's own. Changes in one room share most receivers; in different
-// rooms a shared pass would sum K sources where each has one.
-bool share_pass(size_t k, size_t united, size_t visits) {
-  return k <= kBatch && united * (k + 2) <= 3 * visits;
-}
+// A pass grown job by job while sharing it costs less than a pass each: K jobs (at most kBatch)
+// whose receivers number `visits` in all and `united` without repeats. A shared pass visits the
+// union, each receiver at about 1 + (K - 1) / 3 of one job's cost (one read of its rays, wider
+// sums); separate passes visit each job's own. Changes in one room share most receivers; in
+// different rooms a shared pass would sum K sources where each has one.
+class SharedPass {
+ public:
+  explicit SharedPass(size_t nc) : nc_(nc) {}
+  void start(const std::vector<uint32_t>& receivers) {
+    first_ = &receivers;
+    marked_ = false;
+    jobs_ = 1;
+    visits_ = united_ = receivers.size();
+  }
+  // Adds a job's receivers if the pass is still worth sharing with them.
+  bool add(const std::vector<uint32_t>& receivers) {
+    if (!marked_) {  // marked only once a second job is asked about
+      mark_.assign(nc_, 0);
+      for (uint32_t c : *first_) mark_[c] = 1;
+      marked_ = true;
+    }
+    size_t fresh = 0;
+    for (uint32_t c : receivers) fresh += mark_[c] ? 0 : 1;
+    const size_t k = jobs_ + 1, united = united_ + fresh, visits = visits_ + receivers.size();
+    if (k > kBatch || united * (k + 2) > 3 * visits) return false;
+    for (uint32_t c : receivers) mark_[c] = 1;
+    jobs_ = k;
+    united_ = united;
+    visits_ = visits;
+    return true;
+  }
+  // The union of the jobs' receivers, ascending.
+  void receivers(std::vector<uint32_t>& out) const {
+    out.clear();
+    if (!marked_) {
+      out = *first_;
+      return;
+    }
+    for (uint32_t c = 0; c < nc_; ++c)
+      if (mark_[c]) out.push_back(c);
+  }
+
+ private:
+  size_t nc_;
+  const std::vector<uint32_t>* first_ = nullptr;
+  std::vector<uint8_t> mark_;
+  bool marked_ = false;
+  size_t jobs_ = 0, visits_ = 0, united_ = 0;
+};
 
 // Every job's gather of `level` (gather_k), outputs untouched beyond their receivers (the caller
-// zeroes them). Jobs in order share a pass while share_pass() says so.
+// zeroes them). Jobs in order share a pass while SharedPass says so.
 void gather_many(const GatherOperator& op, const std::vector<GatherJob>& jobs, int threads,
                  int level) {
   const size_t nc = op.grid.size();
   std::vector<float> mixed;
-  std::vector<uint8_t> mark;
   std::vector<uint32_t> all;
+  SharedPass pass(nc);
   for (size_t first = 0, end = 0; first < jobs.size(); first = end) {
+    pass.start(*jobs[first].receivers);
     end = first + 1;
-    size_t visits = jobs[first].receivers->size(), united = visits;
-    if (end < jobs.size()) {
-      mark.assign(nc, 0);
-      for (uint32_t c : *jobs[first].receivers) mark[c] = 1;
-    }
-    for (; end < jobs.size(); ++end) {
-      const std::vector<uint32_t>& r = *jobs[end].receivers;
-      size_t fresh = 0;
-      for (uint32_t c : r) fresh += mark[c] ? 0 : 1;
-      if (!share_pass(end - first + 1, united + fresh, visits + r.size())) break;
-      for (uint32_t c : r) mark[c] = 1;
-      united += fresh;
-      visits += r.size();
-    }
+    while (end < jobs.size() && pass.add(*jobs[end].receivers)) ++end;
     const size_t k = end - first;
     const GatherJob* batch = jobs.data() + first;
     const std::vector<uint32_t>* receivers = batch[0].receivers;
     if (k > 1) {
-      all.clear();
-      for (uint32_t c = 0; c < nc; ++c)
-        if (mark[c]) all.push_back(c);
+      pass.receivers(all);
       receivers = &all;
     }
     // Sources interleaved and padded, so that a ray's hit reads them in whole vectors.
@@ -370,10 +397,10 @@ void run_series(const GatherOperator& op, std::vector<Series>& series,
               uint64_t(receivers[j].size()) * uint64_t(op.level_rays[level]);
       }
     });
+    if (std::find(running.begin(), running.end(), uint8_t(1)) == running.end()) break;
     std::vector<GatherJob> jobs;
     for (size_t j = 0; j < n; ++j)
       if (gathers[j]) jobs.push_back({&delta[j], series[j].present, &receivers[j], &next[j]});
-    if (std::find(running.begin(), running.end(), uint8_t(1)) == running.end()) break;
     gather_many(op, jobs, options.threads, level);
     parallel_for(int(n), jobs_threads, [&](int jj) {
       const size_t j = size_t(jj);
@@ -541,27 +568,21 @@ std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadian
     // end on an object included: their tiles are among each tile's sources).
     receivers[j] = receivers_of(op, jobs[j].direct_change, options.reach, 0);
   });
-  // Batches of jobs whose first bounces share a pass (share_pass), each job with the later ones
+  // Batches of jobs whose first bounces share a pass (SharedPass), each job with the later ones
   // of the next few not yet taken; the batches are solved in parallel, each series in lockstep.
   constexpr size_t kLookAhead = kBatch;  // each look reads a job's receivers
   std::vector<std::vector<size_t>> batches;
-  std::vector<uint8_t> taken(n, 0), mark;
+  std::vector<uint8_t> taken(n, 0);
+  SharedPass pass(nc);
   for (size_t j = 0; j < n; ++j) {
     if (taken[j]) continue;
     std::vector<size_t> batch = {j};
     taken[j] = 1;
-    size_t visits = receivers[j].size(), united = visits;
-    mark.assign(nc, 0);
-    for (uint32_t c : receivers[j]) mark[c] = 1;
+    pass.start(receivers[j]);
     for (size_t i = j + 1, seen = 0; i < n && seen < kLookAhead && batch.size() < kBatch; ++i) {
       if (taken[i]) continue;
       ++seen;
-      size_t fresh = 0;
-      for (uint32_t c : receivers[i]) fresh += mark[c] ? 0 : 1;
-      if (!share_pass(batch.size() + 1, united + fresh, visits + receivers[i].size())) continue;
-      for (uint32_t c : receivers[i]) mark[c] = 1;
-      united += fresh;
-      visits += receivers[i].size();
+      if (!pass.add(receivers[i])) continue;
       batch.push_back(i);
       taken[i] = 1;
     }
