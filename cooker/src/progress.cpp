@@ -12,11 +12,11 @@ namespace {
 // What a progress line shows of a stage's label and of a message at most.
 constexpr size_t kStageBytes = 120;
 constexpr size_t kMessageBytes = 2000;
+}  // namespace
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
-}  // namespace
 
 Progress::Progress(bool quiet)
     : quiet_(quiet),

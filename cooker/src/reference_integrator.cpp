@@ -23,6 +23,7 @@
 #include "direct_light.h"
 #include "lightpatch/cooker/bake.h"
 #include "lightpatch/cooker/error.h"
+#include "lightpatch/cooker/progress.h"
 #include "surface_albedo.h"
 #include "texel_footprint.h"
 #include "worker_pool.h"
@@ -347,10 +348,6 @@ class PathTracer {
   bool any_visible_ = false, any_hidden_ = false;
   float eps_ = 0.0f, extent_ = 0.0f;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 // Per-texel running sums of the samples (in sample order, so any pass or thread split gives the
 // same bits).

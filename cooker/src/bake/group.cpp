@@ -6,6 +6,7 @@
 #include "bake/direct_pass.h"
 #include "bake/plan.h"
 #include "indirect/integrator.h"
+#include "lightpatch/cooker/progress.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -18,10 +19,6 @@ constexpr float kKeepFraction = 0.5f;
 // A bounce-only object is solved when the first bounce of its change could reach this fraction
 // of half an output step; the solved change is then kept or dropped by its own peak.
 constexpr float kBounceOnlyFraction = 0.5f;
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 // The first channel of a map whose three are equal (a light's grey transport).
 FloatImage first_channel(const FloatImage& m) {

@@ -9,6 +9,7 @@
 #include "indirect/gather.h"
 #include "indirect/integrator.h"
 #include "indirect/solve.h"
+#include "lightpatch/cooker/progress.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -29,10 +30,6 @@ glm::vec3 FineSum::at(size_t texel) const {
 }
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 // The near hits as DirectPoints, in the order of a Morton curve over their bounds (10 bits an
 // axis).

@@ -10,6 +10,9 @@
 
 namespace lightpatch::cooker {
 
+// Wall-clock seconds from `t` to now.
+double seconds_since(std::chrono::steady_clock::time_point t);
+
 class Progress {
  public:
   explicit Progress(bool quiet);
