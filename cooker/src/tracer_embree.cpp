@@ -187,21 +187,25 @@ class EmbreeTracer final : public Tracer {
 
   // The static part as packets (one texel's shadow rays leave one point), then one object query
   // for each unblocked ray that crosses an object's bounds. A ray counts once, as in
-  // shadow_query().
+  // shadow_query(). Each chunk's rays are first bounded together (bundle_objects), so a ray tests
+  // only the objects its chunk may cross: most chunks cross none.
   void shadow_query_many(const Ray* rays, int n, int* counts, int* objects,
                          int max_out) const override {
     constexpr int kChunk = 64;
     uint8_t blocked[kChunk];
+    std::vector<int>& near = bundle_scratch();
     for (int first = 0; first < n; first += kChunk) {
       const int m = std::min(kChunk, n - first);
       occluded_batch(rays + first, m, blocked, kStaticMask);
+      near.clear();
+      if (has_objects_ && max_out > 0) bundle_objects(rays + first, m, near);
       for (int i = 0; i < m; ++i) {
         const Ray& r = rays[first + i];
         int& count = counts[first + i];
         if (blocked[i]) {
           count = -1;
-        } else if (has_objects_ && max_out > 0 && r.tmax > r.tmin &&
-                   crosses_any_object(r.origin, r.dir, r.tmin, r.tmax)) {
+        } else if (!near.empty() && r.tmax > r.tmin &&
+                   crosses_object_of(near, r.origin, r.dir, r.tmin, r.tmax)) {
           int* out = objects + size_t(first + i) * size_t(max_out);
           count = std::max(0, collect(r.origin, r.dir, r.tmin, r.tmax, kObjectMask, out, max_out));
         } else {
@@ -557,6 +561,66 @@ class EmbreeTracer final : public Tracer {
       }
     }
     return false;
+  }
+
+  bool crosses_object_of(const std::vector<int>& near, const glm::vec3& origin,
+                         const glm::vec3& dir, float tmin, float tmax) const {
+    const glm::vec3 inv(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+    for (int o : near) {
+      if (segment_hits_box(origin, dir, inv, tmin, tmax, object_lo_[size_t(o)],
+                           object_hi_[size_t(o)])) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // The objects (Scene::objects indices) whose bounds rays[0, n) may cross. Every point of a
+  // segment from o_i to e_i lies within max(|o_i - A|, |e_i - B|) of the segment from A to B,
+  // whatever A and B are: so a box the segments cross is one that segment AB crosses once the box
+  // is grown by R, the largest of those distances. A and B are the means of the rays' starts and
+  // ends. Rays without a finite end (a sun's) keep every object.
+  void bundle_objects(const Ray* rays, int n, std::vector<int>& near) const {
+    glm::vec3 a(0.0f), b(0.0f);
+    for (int i = 0; i < n; ++i) {
+      a += rays[i].origin;
+      b += rays[i].origin + rays[i].dir * rays[i].tmax;
+    }
+    a /= float(n);
+    b /= float(n);
+    const bool finite = std::isfinite(b.x + b.y + b.z);  // an infinite end makes the sum so
+    float r2 = 0.0f;
+    for (int i = 0; finite && i < n; ++i) {
+      const glm::vec3 o = rays[i].origin - a, e = rays[i].origin + rays[i].dir * rays[i].tmax - b;
+      r2 = std::max(r2, std::max(glm::dot(o, o), glm::dot(e, e)));
+    }
+    const glm::vec3 d = b - a;
+    const glm::vec3 inv(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
+    const float r = std::sqrt(r2) * (1.0f + 1e-4f);
+    const float ab_scale = std::max(max_abs(a), max_abs(b));
+    for (size_t o = 0; o < object_lo_.size(); ++o) {
+      if (!children_[o + 1]) continue;
+      if (!finite) {
+        near.push_back(int(o));
+        continue;
+      }
+      // The slack covers float rounding of the sums above, at the scale of the coordinates.
+      const float scale = std::max({ab_scale, max_abs(object_lo_[o]), max_abs(object_hi_[o])});
+      const glm::vec3 grow(r + scale * 1e-5f);
+      if (segment_hits_box(a, d, inv, 0.0f, 1.0f, object_lo_[o] - grow, object_hi_[o] + grow))
+        near.push_back(int(o));
+    }
+  }
+
+  static float max_abs(const glm::vec3& v) {
+    return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+  }
+
+  // A worker's list for bundle_objects, reused from call to call (shadow_query_many allocates
+  // nothing once warm).
+  static std::vector<int>& bundle_scratch() {
+    thread_local std::vector<int> near;
+    return near;
   }
 
   static bool segment_hits_box(const glm::vec3& o, const glm::vec3& d, const glm::vec3& inv,

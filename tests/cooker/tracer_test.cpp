@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -184,6 +185,60 @@ TEST(Tracer, BatchQueriesMatchSingleRays) {
       EXPECT_GT(crossing, 10);  // rays that cross objects were compared
     }
   }
+}
+
+// Shadow rays as the direct pass makes them: bundles leaving a texel's patch (5 cm) for a light
+// sphere (30 cm). shadow_query_many bounds each bundle before it tests objects; the rays whose
+// bundle's centre line misses an object by less than the bundle's spread must still find it.
+TEST(Tracer, ShadowBundlesFindTheObjectsTheirRaysGraze) {
+  Scene s;
+  test::add_closed_room(s, {-2, 0, -2}, {2, 3, 2}, 0.1f, "room");
+  test::add_object_box(s, {0.8f, 0, 0.8f}, {1.4f, 0.6f, 1.4f}, "crate");
+  test::add_object_box(s, {-1.5f, 0, 0.5f}, {-1.0f, 1.0f, 1.2f}, "chest");
+  test::add_object_box(s, {-0.2f, 1.0f, -0.2f}, {0.2f, 1.05f, 0.2f}, "plate");  // thin
+  test::finish(s);
+  auto tr = make_embree_tracer(s);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> pos(-1.9f, 1.9f), height(0.05f, 2.95f), unit(-1.0f, 1.0f);
+  auto ball = [&](float r) {
+    glm::vec3 v;
+    do v = glm::vec3(unit(rng), unit(rng), unit(rng));
+    while (glm::dot(v, v) > 1.0f);
+    return v * r;
+  };
+  constexpr int kMax = 3, kBundle = 61;  // a chunk and a partial one
+  int grazing = 0;  // bundles whose centre line misses every object while a ray crosses one
+  for (int bundle = 0; bundle < 400; ++bundle) {
+    const glm::vec3 a(pos(rng), height(rng), pos(rng)), b(pos(rng), height(rng), pos(rng));
+    std::vector<Ray> rays(kBundle);
+    for (Ray& r : rays) {
+      const glm::vec3 o = a + ball(0.05f), e = b + ball(0.3f);
+      r.origin = o;
+      r.tmax = glm::length(e - o);
+      r.dir = (e - o) / r.tmax;
+      r.tmin = tr->epsilon();
+    }
+    if (bundle % 50 == 0) rays[3].tmax = std::numeric_limits<float>::infinity();  // a sun's
+    if (bundle % 50 == 1) std::fill(rays.begin(), rays.end(), rays[0]);  // one point, one end
+    std::vector<int> counts(kBundle), objects(size_t(kBundle) * kMax);
+    tr->shadow_query_many(rays.data(), kBundle, counts.data(), objects.data(), kMax);
+    bool crossing = false;
+    for (int i = 0; i < kBundle; ++i) {
+      const Ray& r = rays[size_t(i)];
+      int one[kMax] = {-1, -1, -1};
+      const int k = tr->shadow_query(r.origin, r.dir, r.tmin, r.tmax, one, kMax);
+      ASSERT_EQ(counts[size_t(i)], k) << "bundle " << bundle << " ray " << i;
+      const int* many = objects.data() + size_t(i) * kMax;
+      for (int j = 0; j < k; ++j) EXPECT_NE(std::find(many, many + k, one[j]), many + k);
+      crossing = crossing || k > 0;
+    }
+    int centre[kMax];
+    const glm::vec3 ab = b - a;
+    if (crossing &&
+        tr->shadow_query(a, glm::normalize(ab), 0.0f, glm::length(ab), centre, kMax) == 0)
+      ++grazing;
+  }
+  EXPECT_GT(grazing, 10);  // the bound's spread was needed, and checked
 }
 
 }  // namespace

@@ -21,7 +21,7 @@ constexpr float kKeepFraction = 0.5f;
 constexpr float kBounceOnlyFraction = 0.5f;
 
 // The first channel of a map whose three are equal (a light's grey transport).
-FloatImage first_channel(const FloatImage& m) {
+FloatImage first_channel(FloatImage m) {
   if (m.channels == 1) return m;
   FloatImage out(m.width, m.height, 1);
   for (size_t i = 0; i < out.data.size(); ++i) out.data[i] = m.data[i * size_t(m.channels)];
@@ -159,7 +159,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
   }
   // Without bounce light a light's transport is grey: one channel.
   const bool grey = !is_static && !bounce;
-  out.map = grey ? first_channel(dp.map) : std::move(dp.map);
+  out.map = grey ? first_channel(std::move(dp.map)) : std::move(dp.map);
 
   // Each slot's map: its direct shadow and its bounce change; kept above half a step.
   const float keep_at = kKeepFraction * lg.threshold;
@@ -189,7 +189,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
       return;
     }
     m.solved = true;
-    if (grey) m.map = first_channel(m.map);
+    if (grey) m.map = first_channel(std::move(m.map));
     m.peak = peak_of(m.map, texels);
     if (planned && !(m.peak > keep_at)) m = Made{FloatImage(), FloatImage(), m.peak, true};
   });
@@ -247,7 +247,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
     pc.object_a = std::min(oa, ob);
     pc.object_b = std::max(oa, ob);
     pc.map = std::move(img);
-    if (grey) pc.map = first_channel(pc.map);
+    if (grey) pc.map = first_channel(std::move(pc.map));
     corrections.push_back(std::move(pc));
     kept_pairs.push_back(key);
   }
