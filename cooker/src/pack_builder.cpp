@@ -568,7 +568,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         const float steps = 2.0f * options.level_tolerance;  // threshold = half an output step
         auto bytes = [](const SourcePatch& p) {
           return uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
-                 sizeof(pack::PatchRecord);
+                 sizeof(pack::PatchRecord) + kPatchDrawBytes;
         };
         // Stores p at the coarsest level its error allows; returns that level.
         auto store_coarsest = [&](SourcePatch& p) {
@@ -578,18 +578,42 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           if (level > 0) p = std::move(reduced);
           return level;
         };
+        // A level-0 patch (its level chosen) cut into tiles where that takes fewer bytes.
+        auto tiled = [&](SourcePatch p) {
+          std::vector<SourcePatch> one;
+          if (p.level == 0 && (p.dest.w > kLevelTile || p.dest.h > kLevelTile)) {
+            std::vector<SourcePatch> tiles = split_patch(p, kLevelTile);
+            uint64_t split_bytes = 0;
+            for (SourcePatch& t : tiles) {
+              store_coarsest(t);
+              split_bytes += bytes(t);
+            }
+            if (!tiles.empty() && split_bytes < bytes(p)) return tiles;
+          }
+          one.push_back(std::move(p));
+          return one;
+        };
         const size_t end = out.size();
         for (size_t k = first; k < end; ++k) {
           SourcePatch& p = out[k];
-          if (store_coarsest(p) > 0) continue;
-          if (p.dest.w <= kLevelTile && p.dest.h <= kLevelTile) continue;
-          std::vector<SourcePatch> tiles = split_patch(p, kLevelTile);
-          uint64_t split_bytes = 0;
-          for (SourcePatch& t : tiles) {
-            store_coarsest(t);
-            split_bytes += bytes(t);
+          const SourcePatch whole = p;
+          store_coarsest(p);
+          // Charts side by side in the page are different surfaces: their light breaks at the
+          // border, which no magnification follows. Cut along them first, each chart's piece
+          // chosen (and tiled) again.
+          std::vector<SourcePatch> pieces;
+          uint64_t pieces_bytes = 0;
+          for (SourcePatch& c : split_by_charts(whole, regions)) {
+            store_coarsest(c);
+            for (SourcePatch& t : tiled(std::move(c))) {
+              pieces_bytes += bytes(t);
+              pieces.push_back(std::move(t));
+            }
           }
-          if (tiles.empty() || split_bytes >= bytes(p)) continue;
+          std::vector<SourcePatch> tiles = tiled(p);
+          uint64_t tiles_bytes = 0;
+          for (const SourcePatch& t : tiles) tiles_bytes += bytes(t);
+          if (!pieces.empty() && pieces_bytes < tiles_bytes) tiles = std::move(pieces);
           p = std::move(tiles[0]);
           for (size_t t = 1; t < tiles.size(); ++t) out.push_back(std::move(tiles[t]));
         }

@@ -155,36 +155,58 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
   return chosen;
 }
 
-std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile) {
-  if (patch.level != 0 || tile < 1) throw CookError("split_patch: a magnified patch or no tile");
+std::vector<SourcePatch> cut_patch(const SourcePatch& patch, const std::vector<Rect>& cells) {
+  if (patch.level != 0) throw CookError("cut_patch: a magnified patch");
   const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels;
   std::vector<SourcePatch> out;
-  for (int ty = 0; ty < h; ty += tile) {
-    for (int tx = 0; tx < w; tx += tile) {
-      int x0 = tx + tile, y0 = ty + tile, x1 = tx - 1, y1 = ty - 1;
-      for (int y = ty; y < std::min(h, ty + tile); ++y)
-        for (int x = tx; x < std::min(w, tx + tile); ++x)
-          if (patch.significant[size_t(y) * w + x]) {
-            x0 = std::min(x0, x);
-            y0 = std::min(y0, y);
-            x1 = std::max(x1, x);
-            y1 = std::max(y1, y);
-          }
-      if (x1 < x0) continue;
-      SourcePatch q = patch;
-      q.dest = Rect{patch.dest.x + x0, patch.dest.y + y0, x1 - x0 + 1, y1 - y0 + 1};
-      q.values.assign(size_t(q.dest.w) * q.dest.h * ch, 0.0f);
-      q.significant.assign(size_t(q.dest.w) * q.dest.h, 0);
-      for (int y = 0; y < q.dest.h; ++y)
-        for (int x = 0; x < q.dest.w; ++x) {
-          const size_t from = size_t(y0 + y) * w + size_t(x0 + x), to = size_t(y) * q.dest.w + x;
-          q.significant[to] = patch.significant[from];
-          for (int c = 0; c < ch; ++c) q.values[to * ch + c] = patch.values[from * ch + c];
+  for (const Rect& cell : cells) {
+    const int cx0 = std::max(cell.x, 0), cy0 = std::max(cell.y, 0);
+    const int cx1 = std::min(cell.x + cell.w, w), cy1 = std::min(cell.y + cell.h, h);
+    if (cx1 <= cx0 || cy1 <= cy0) continue;
+    int x0 = cx1, y0 = cy1, x1 = cx0 - 1, y1 = cy0 - 1;
+    for (int y = cy0; y < cy1; ++y)
+      for (int x = cx0; x < cx1; ++x)
+        if (patch.significant[size_t(y) * w + x]) {
+          x0 = std::min(x0, x);
+          y0 = std::min(y0, y);
+          x1 = std::max(x1, x);
+          y1 = std::max(y1, y);
         }
-      out.push_back(std::move(q));
-    }
+    if (x1 < x0) continue;
+    SourcePatch q = patch;
+    q.dest = Rect{patch.dest.x + x0, patch.dest.y + y0, x1 - x0 + 1, y1 - y0 + 1};
+    q.values.assign(size_t(q.dest.w) * q.dest.h * ch, 0.0f);
+    q.significant.assign(size_t(q.dest.w) * q.dest.h, 0);
+    for (int y = 0; y < q.dest.h; ++y)
+      for (int x = 0; x < q.dest.w; ++x) {
+        const size_t from = size_t(y0 + y) * w + size_t(x0 + x), to = size_t(y) * q.dest.w + x;
+        q.significant[to] = patch.significant[from];
+        for (int c = 0; c < ch; ++c) q.values[to * ch + c] = patch.values[from * ch + c];
+      }
+    out.push_back(std::move(q));
   }
   return out;
+}
+
+std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile) {
+  if (patch.level != 0 || tile < 1) throw CookError("split_patch: a magnified patch or no tile");
+  std::vector<Rect> cells;
+  for (int ty = 0; ty < patch.dest.h; ty += tile)
+    for (int tx = 0; tx < patch.dest.w; tx += tile) cells.push_back(Rect{tx, ty, tile, tile});
+  return cut_patch(patch, cells);
+}
+
+std::vector<SourcePatch> split_by_charts(const SourcePatch& patch,
+                                         const std::vector<Region>& regions) {
+  std::vector<Rect> cells;
+  const Rect& d = patch.dest;
+  for (const Region& region : regions) {
+    const Rect& r = region.rect;
+    if (r.x >= d.x + d.w || d.x >= r.x + r.w || r.y >= d.y + d.h || d.y >= r.y + r.h) continue;
+    for (const Rect& c : region.charts) cells.push_back(Rect{c.x - d.x, c.y - d.y, c.w, c.h});
+  }
+  if (cells.size() < 2) return {};
+  return cut_patch(patch, cells);
 }
 
 float colour_spread(const SourcePatch& patch) {

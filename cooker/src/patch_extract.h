@@ -70,9 +70,28 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
 // 16 at 1.2-1.3x.
 constexpr int kLevelTile = 16;
 
-// A level-0 patch cut into tiles of at most tile x tile texels, each shrunk to its significant
-// texels' box (tiles with none are dropped); the same values, the same attributes otherwise.
+// What a patch costs beyond its atlas texels and record when the pack builder weighs cutting one
+// into tiles or charts, in atlas bytes: each patch is one more quad to draw. On the full inn
+// (llvmpipe, `lightpatch bench`) a cut was worth 46 bytes per patch it added on average; cut
+// wherever it saved bytes (77,773 patches) the full rebuild drew at 1.54-1.59x the fill-rate
+// floor, at 16 bytes a patch 1.41x (47,729 patches), at 32 1.25-1.28x (31,707; the uncut pack
+// 1.21-1.32x in the same session).
+constexpr uint64_t kPatchDrawBytes = 32;
+
+// A level-0 patch cut into `cells` (rectangles in the patch's own texels, clipped to it), each
+// shrunk to its significant texels' box (cells with none are dropped); the same values, the same
+// attributes otherwise. Texels outside every cell are dropped.
+std::vector<SourcePatch> cut_patch(const SourcePatch& patch, const std::vector<Rect>& cells);
+
+// cut_patch() into tiles of at most tile x tile texels.
 std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile);
+
+// cut_patch() into the charts (Region::charts, each with its border) of the regions the patch
+// overlaps: no piece blends two charts when magnified. The texels outside every chart's rectangle
+// (the dilation's fill of a region's free space, which no mesh samples) are dropped. Empty when
+// the patch meets fewer than two charts.
+std::vector<SourcePatch> split_by_charts(const SourcePatch& patch,
+                                         const std::vector<Region>& regions);
 
 // The largest max - min over a 3-channel patch's texels (its tint); 0 for other patches.
 float colour_spread(const SourcePatch& patch);

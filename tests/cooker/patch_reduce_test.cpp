@@ -148,6 +148,57 @@ TEST(CoarsestLevel, ASharpEdgeStaysAtFullResolutionAndAFlatPatchGoesToTheTop) {
   EXPECT_THROW(coarsest_level(reduced, 2, 1.0f), CookError);
 }
 
+// Two charts side by side in one region (a 2-texel gap between them), lit 2 and 50: the step at
+// their border keeps the whole patch at level 0, while each chart alone is flat.
+TEST(SplitByCharts, EachChartIsCutOnItsOwnAndMagnifiedAlone) {
+  SourcePatch p = ramp_x(40, 16, 0.0f);
+  p.dest = Rect{10, 20, 40, 16};
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 40; ++x) {
+      const size_t t = size_t(y) * 40 + size_t(x);
+      p.values[t] = x < 18 ? 2.0f : x < 20 ? 0.0f : 50.0f;
+      p.significant[t] = x < 18 || x >= 20 ? 1 : 0;
+    }
+  EXPECT_EQ(coarsest_level(p, 3, 1.0f), 0);
+  Region region;
+  region.rect = Rect{10, 20, 40, 16};
+  region.charts = {Rect{10, 20, 18, 16}, Rect{30, 20, 20, 16}};
+  Region elsewhere;  // overlaps nothing of the patch: not read
+  elsewhere.rect = Rect{100, 100, 8, 8};
+  elsewhere.charts = {Rect{100, 100, 4, 8}, Rect{104, 100, 4, 8}};
+  const std::vector<SourcePatch> pieces = split_by_charts(p, {elsewhere, region});
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(pieces[0].dest.x, 10);
+  EXPECT_EQ(pieces[0].dest.w, 18);
+  EXPECT_EQ(pieces[1].dest.x, 30);
+  EXPECT_EQ(pieces[1].dest.w, 20);
+  for (const SourcePatch& q : pieces) {
+    EXPECT_EQ(q.dest.y, 20);
+    EXPECT_EQ(q.dest.h, 16);
+    const float want = q.dest.x == 10 ? 2.0f : 50.0f;
+    for (float v : q.values) EXPECT_EQ(v, want);
+    EXPECT_EQ(coarsest_level(q, 3, 1.0f), 3);
+  }
+  // One chart: nothing to cut.
+  region.charts = {Rect{10, 20, 40, 16}};
+  EXPECT_TRUE(split_by_charts(p, {region}).empty());
+}
+
+TEST(CutPatch, CellsAreClippedToThePatchAndShrunkToTheirSignificantTexels) {
+  SourcePatch p = ramp_x(8, 8, 0.0f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) p.significant[size_t(y) * 8 + x] = x >= 2 && y >= 3 ? 1 : 0;
+  // Half outside, wholly outside (right and above), empty of significant texels.
+  const std::vector<SourcePatch> cut =
+      cut_patch(p, {Rect{-4, -4, 8, 10}, Rect{9, 0, 4, 4}, Rect{0, -6, 4, 4}, Rect{0, 0, 2, 8}});
+  ASSERT_EQ(cut.size(), 1u);
+  EXPECT_EQ(cut[0].dest.x, p.dest.x + 2);
+  EXPECT_EQ(cut[0].dest.y, p.dest.y + 3);
+  EXPECT_EQ(cut[0].dest.w, 2);
+  EXPECT_EQ(cut[0].dest.h, 3);
+  EXPECT_EQ(cut[0].values[0], p.values[size_t(3) * 8 + 2]);
+}
+
 TEST(PatchReduce, RefusesALevelOutOfRangeOrTwice) {
   SourcePatch p = ramp(4, 4, 1);
   EXPECT_THROW(reduce_patch(p, 0), CookError);
