@@ -4,6 +4,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 #include <tuple>
@@ -578,15 +579,26 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           if (level > 0) p = std::move(reduced);
           return level;
         };
-        // A level-0 patch (its level chosen) cut into tiles where that takes fewer bytes.
-        auto tiled = [&](SourcePatch p) {
+        // A level-0 patch (its level chosen) cut into tiles of `tile` texels where that takes
+        // fewer bytes, each tile at level 0 cut again into tiles half as wide, down to
+        // kMinLevelTile: a sharp feature keeps only the small tiles it crosses at level 0.
+        std::function<std::vector<SourcePatch>(SourcePatch, int)> tiled = [&](SourcePatch p,
+                                                                              int tile) {
           std::vector<SourcePatch> one;
-          if (p.level == 0 && (p.dest.w > kLevelTile || p.dest.h > kLevelTile)) {
-            std::vector<SourcePatch> tiles = split_patch(p, kLevelTile);
+          if (p.level == 0 && (p.dest.w > tile || p.dest.h > tile)) {
+            std::vector<SourcePatch> tiles;
             uint64_t split_bytes = 0;
-            for (SourcePatch& t : tiles) {
+            for (SourcePatch& t : split_patch(p, tile)) {
               store_coarsest(t);
-              split_bytes += bytes(t);
+              std::vector<SourcePatch> finer;
+              if (tile / 2 >= kMinLevelTile)
+                finer = tiled(std::move(t), tile / 2);
+              else
+                finer.push_back(std::move(t));
+              for (SourcePatch& f : finer) {
+                split_bytes += bytes(f);
+                tiles.push_back(std::move(f));
+              }
             }
             if (!tiles.empty() && split_bytes < bytes(p)) return tiles;
           }
@@ -605,12 +617,12 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           uint64_t pieces_bytes = 0;
           for (SourcePatch& c : split_by_charts(whole, regions)) {
             store_coarsest(c);
-            for (SourcePatch& t : tiled(std::move(c))) {
+            for (SourcePatch& t : tiled(std::move(c), kLevelTile)) {
               pieces_bytes += bytes(t);
               pieces.push_back(std::move(t));
             }
           }
-          std::vector<SourcePatch> tiles = tiled(p);
+          std::vector<SourcePatch> tiles = tiled(p, kLevelTile);
           uint64_t tiles_bytes = 0;
           for (const SourcePatch& t : tiles) tiles_bytes += bytes(t);
           if (!pieces.empty() && pieces_bytes < tiles_bytes) tiles = std::move(pieces);
