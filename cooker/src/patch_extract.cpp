@@ -158,6 +158,12 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
 std::vector<SourcePatch> cut_patch(const SourcePatch& patch, const std::vector<Rect>& cells) {
   if (patch.level != 0) throw CookError("cut_patch: a magnified patch");
   const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels;
+  auto kept = [&](size_t t) {
+    if (patch.significant[t]) return true;
+    for (int c = 0; c < ch; ++c)
+      if (patch.values[t * ch + c] > kCutKeepFraction * patch.threshold) return true;
+    return false;
+  };
   std::vector<SourcePatch> out;
   for (const Rect& cell : cells) {
     const int cx0 = std::max(cell.x, 0), cy0 = std::max(cell.y, 0);
@@ -166,7 +172,7 @@ std::vector<SourcePatch> cut_patch(const SourcePatch& patch, const std::vector<R
     int x0 = cx1, y0 = cy1, x1 = cx0 - 1, y1 = cy0 - 1;
     for (int y = cy0; y < cy1; ++y)
       for (int x = cx0; x < cx1; ++x)
-        if (patch.significant[size_t(y) * w + x]) {
+        if (kept(size_t(y) * w + x)) {
           x0 = std::min(x0, x);
           y0 = std::min(y0, y);
           x1 = std::max(x1, x);

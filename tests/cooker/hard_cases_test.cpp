@@ -727,7 +727,7 @@ TEST(HardCases, LightMapPatchLevelsSaveBytesAndRecomposeLikeBakeState) {
               levels.pack.patch_count());
   EXPECT_EQ(magnified[0], 0u);
   EXPECT_GT(magnified[1], 0u);
-  EXPECT_LT(double(atlas_bytes(levels.pack)), 0.8 * double(atlas_bytes(full.pack)));
+  EXPECT_LT(double(atlas_bytes(levels.pack)), 0.7 * double(atlas_bytes(full.pack)));  // 0.598x
   expect_standard_states_match(full);
   expect_standard_states_match(levels);
   // The two packs' recompositions, state by state, in output steps at every valid texel.

@@ -185,7 +185,8 @@ TEST(SplitByCharts, EachChartIsCutOnItsOwnAndMagnifiedAlone) {
 }
 
 TEST(CutPatch, CellsAreClippedToThePatchAndShrunkToTheirSignificantTexels) {
-  SourcePatch p = ramp_x(8, 8, 0.0f);
+  SourcePatch p = ramp_x(8, 8, 0.0f);  // 100 everywhere
+  p.threshold = 1000.0f;               // so nothing is kept for its value alone
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 8; ++x) p.significant[size_t(y) * 8 + x] = x >= 2 && y >= 3 ? 1 : 0;
   // Half outside, wholly outside (right and above), empty of significant texels.
@@ -197,6 +198,16 @@ TEST(CutPatch, CellsAreClippedToThePatchAndShrunkToTheirSignificantTexels) {
   EXPECT_EQ(cut[0].dest.w, 2);
   EXPECT_EQ(cut[0].dest.h, 3);
   EXPECT_EQ(cut[0].values[0], p.values[size_t(3) * 8 + 2]);
+  // Dim light beside the significant texels (above kCutKeepFraction of the threshold) stays in
+  // the piece; below it, it is cut away.
+  p.values[size_t(1) * 8 + 3] = kCutKeepFraction * p.threshold * 1.01f;
+  p.values[size_t(3) * 8 + 0] = kCutKeepFraction * p.threshold * 0.99f;
+  const std::vector<SourcePatch> dim = cut_patch(p, {Rect{0, 0, 4, 8}});
+  ASSERT_EQ(dim.size(), 1u);
+  EXPECT_EQ(dim[0].dest.x, p.dest.x + 2);
+  EXPECT_EQ(dim[0].dest.y, p.dest.y + 1);
+  EXPECT_EQ(dim[0].dest.w, 2);
+  EXPECT_EQ(dim[0].dest.h, 7);
 }
 
 TEST(PatchReduce, RefusesALevelOutOfRangeOrTwice) {
