@@ -560,11 +560,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         }
       }
       // Smooth light-map patches (bounce light, soft falloff) at a coarser level, each chosen by
-      // its own error, so that sharp ones (shadow edges, creases) keep level 0. A patch that
-      // must keep level 0 is cut into kLevelTile tiles, each chosen again, where that takes
-      // fewer bytes (atlas bytes and records): the smooth part of a tile with one shadow edge
-      // still shrinks. Level 0 first within a job, so that the runtime's runs of one program
-      // stay long.
+      // its own error, so that sharp ones (shadow edges, creases) keep level 0. A patch is cut
+      // into its charts, and a part that must keep level 0 into tiles, each chosen again, where
+      // that takes fewer bytes (atlas bytes, records and kPatchDrawBytes a quad): the smooth part
+      // of a tile with one shadow edge still shrinks. Level 0 first within a job, so that the
+      // runtime's runs of one program stay long.
       if (target == kTargetLightMap && options.max_patch_level > 0) {
         const float steps = 2.0f * options.level_tolerance;  // threshold = half an output step
         auto bytes = [](const SourcePatch& p) {
