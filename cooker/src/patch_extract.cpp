@@ -203,13 +203,14 @@ std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile) {
 }
 
 std::vector<SourcePatch> split_by_charts(const SourcePatch& patch,
-                                         const std::vector<Region>& regions) {
+                                         const std::vector<Region>& regions, int inset) {
   std::vector<Rect> cells;
   const Rect& d = patch.dest;
   for (const Region& region : regions) {
     const Rect& r = region.rect;
     if (r.x >= d.x + d.w || d.x >= r.x + r.w || r.y >= d.y + d.h || d.y >= r.y + r.h) continue;
-    for (const Rect& c : region.charts) cells.push_back(Rect{c.x - d.x, c.y - d.y, c.w, c.h});
+    for (const Rect& c : region.charts)
+      cells.push_back(Rect{c.x - d.x + inset, c.y - d.y + inset, c.w - 2 * inset, c.h - 2 * inset});
   }
   if (cells.size() < 2) return {};
   return cut_patch(patch, cells);

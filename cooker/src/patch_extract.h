@@ -102,11 +102,12 @@ std::vector<SourcePatch> cut_patch(const SourcePatch& patch, const std::vector<R
 std::vector<SourcePatch> split_patch(const SourcePatch& patch, int tile);
 
 // cut_patch() into the charts (Region::charts, each with its border) of the regions the patch
-// overlaps: no piece blends two charts when magnified. The texels outside every chart's rectangle
-// (the dilation's fill of a region's free space, which no mesh samples) are dropped. Empty when
-// the patch meets fewer than two charts.
+// overlaps, each chart's rectangle inset by `inset` texels per side: no piece blends two charts
+// when magnified. The texels outside every (inset) chart rectangle are dropped: the dilation's
+// fill of a region's free space, and with inset = Layout::border - 1 the border's outer rings,
+// which no bilinear read of a mesh reaches. Empty when the patch meets fewer than two charts.
 std::vector<SourcePatch> split_by_charts(const SourcePatch& patch,
-                                         const std::vector<Region>& regions);
+                                         const std::vector<Region>& regions, int inset = 0);
 
 // The largest max - min over a 3-channel patch's texels (its tint); 0 for other patches.
 float colour_spread(const SourcePatch& patch);

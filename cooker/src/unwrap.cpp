@@ -784,6 +784,7 @@ Layout build_layout(const Scene& scene, const LayoutOptions& options) {
 
   const glm::vec2 inv(1.0f / float(layout.width), 1.0f / float(layout.height));
   const int border = std::max(options.border_texels, layout.align);
+  layout.border = border;
   std::vector<std::vector<uint32_t>> tri_indices(scene.meshes.size());
   std::string close_charts;  // TEXCOORD_1 regions whose charts share texels
   for (RegionCharts& r : regions) {

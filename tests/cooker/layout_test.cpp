@@ -131,6 +131,45 @@ TEST(Layout, DeterministicInsideThePageAndWithoutOverlaps) {
       ASSERT_FALSE(overlap(&all[i], &all[j])) << i << " " << j;
 }
 
+// What the pack builder's chart cut keeps (split_by_charts, inset Layout::border - 1): every texel
+// a bilinear read of a triangle can reach lies in one chart rectangle of its region less the
+// border's outer rings, at the default border and at a wider one.
+TEST(Layout, BilinearReadsOfEveryTriangleStayInsideItsChartLessTheOuterBorderRings) {
+  const Scene s = props_scene();
+  for (const int border : {2, 4}) {
+    LayoutOptions o;
+    o.texels_per_unit = 16.0f;
+    o.border_texels = border;
+    const Layout a = build_layout(s, o);
+    ASSERT_EQ(a.border, border);
+    const int inset = a.border - 1;
+    const glm::vec2 size(float(a.width), float(a.height));
+    size_t triangles = 0;
+    for (size_t m = 0; m < a.meshes.size(); ++m) {
+      const MeshLayout& ml = a.meshes[m];
+      const Region& region = a.regions[m];  // one region per mesh in a scene built in code
+      ASSERT_FALSE(region.charts.empty());
+      for (size_t t = 0; t + 2 < ml.indices.size(); t += 3) {
+        glm::vec2 lo(1e30f), hi(-1e30f);
+        for (size_t k = 0; k < 3; ++k) {
+          lo = glm::min(lo, ml.uv[ml.indices[t + k]] * size);
+          hi = glm::max(hi, ml.uv[ml.indices[t + k]] * size);
+        }
+        // The texels a bilinear tap anywhere in the triangle's box reads.
+        const int x0 = int(std::floor(lo.x - 0.5f)), x1 = int(std::floor(hi.x - 0.5f)) + 1;
+        const int y0 = int(std::floor(lo.y - 0.5f)), y1 = int(std::floor(hi.y - 0.5f)) + 1;
+        bool inside = false;
+        for (const Rect& c : region.charts)
+          inside = inside || (x0 >= c.x + inset && x1 < c.x + c.w - inset && y0 >= c.y + inset &&
+                              y1 < c.y + c.h - inset);
+        EXPECT_TRUE(inside) << region.name << " triangle " << t / 3 << " border " << border;
+        ++triangles;
+      }
+    }
+    EXPECT_GT(triangles, 20u);
+  }
+}
+
 TEST(Layout, DensityGivesChartSizeAndIsLoweredToFitWithANote) {
   Scene s;
   test::add_quad(s, {0, 0, 0}, {0, 0, 1}, {2, 0, 1}, {2, 0, 0}, "plane");  // 2 m x 1 m

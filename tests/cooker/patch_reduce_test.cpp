@@ -179,6 +179,15 @@ TEST(SplitByCharts, EachChartIsCutOnItsOwnAndMagnifiedAlone) {
     for (float v : q.values) EXPECT_EQ(v, want);
     EXPECT_EQ(coarsest_level(q, 3, 1.0f), 3);
   }
+  // Inset by a ring: each piece loses its chart rectangle's outer ring of texels.
+  const std::vector<SourcePatch> inset = split_by_charts(p, {region}, 1);
+  ASSERT_EQ(inset.size(), 2u);
+  EXPECT_EQ(inset[0].dest.x, 11);
+  EXPECT_EQ(inset[0].dest.y, 21);
+  EXPECT_EQ(inset[0].dest.w, 16);
+  EXPECT_EQ(inset[0].dest.h, 14);
+  EXPECT_EQ(inset[1].dest.x, 31);
+  EXPECT_EQ(inset[1].dest.w, 18);
   // One chart: nothing to cut.
   region.charts = {Rect{10, 20, 40, 16}};
   EXPECT_TRUE(split_by_charts(p, {region}).empty());

@@ -80,6 +80,10 @@ struct Layout {
   // Texels per block the charts are laid out on (LayoutOptions::align, after any lowering): the
   // scale of the pack's indirect map (1: none). The page is a whole number of blocks.
   int align = 1;
+  // Texels of border around each chart's content in Region::charts (LayoutOptions::border_texels,
+  // at least one block; 0 where charts are not laid out here). Bilinear filtering at a chart's
+  // edge reads the first ring only.
+  int border = 0;
   std::vector<MeshLayout> meshes;  // parallel to Scene::meshes
   std::vector<Region> regions;
   std::vector<SeamEdge> seams;
