@@ -35,6 +35,11 @@ namespace {
 struct MapJob {
   const FloatImage* map = nullptr;
   const FloatImage* indirect = nullptr;  // its bounce part's block image, or null
+  const FloatImage* direct = nullptr;    // its direct part (ShadowMap::direct), or null
+  // Its threshold is half a step of its group's own peak, finer than the authored exposure's (a
+  // light far dimmer than the others, which recomposes alone to 8 bits): its bounce light keeps
+  // the level tolerance (PackOptions::bounce_tolerance is about the authored image).
+  bool own_peak = false;
   SourcePatch prototype;
   float threshold = 0.0f;
   std::string what;
@@ -42,6 +47,13 @@ struct MapJob {
   // light at the indirect level, pack_format.h), with no light-map part.
   bool indirect_only = false;
 };
+
+// A map's bounce part (PackOptions::bounce_tolerance) is significant from this fraction of the
+// map's threshold. At 1 each part dropped the dim tail that the whole map carries beside the
+// other part's light: every map of the small inn in parts (bounce tolerance 4, uncapped), its fire
+// alone against `bake-state`, signed bias -1.94 % (-1.23 % whole); at 0.5, -0.68 %; at 0.25,
+// -0.25 % for 4 % more bytes.
+constexpr float kBounceThresholdFraction = 0.5f;
 
 float max3(const glm::vec3& v) {
   return std::max({v.x, v.y, v.z});
@@ -370,6 +382,28 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   for (size_t i = 0; i < maps.lights.size(); ++i)
     light_threshold[i] = significance(maps.contribution[i], half_step / authored[i]);
   const float base_threshold = significance(maps.base, half_step);
+  // The authored image's light at each texel, in output steps (the base map and every light's
+  // contribution at its authored factor, each texel's brightest channel): where it is dim, bounce
+  // light keeps the level tolerance (PackOptions::bounce_tolerance).
+  FloatImage authored_steps;
+  if (maps.output_step > 0.0f && !maps.base.data.empty()) {
+    authored_steps = FloatImage(maps.base.width, maps.base.height, 1);
+    auto add = [&](const FloatImage& m, float a) {
+      if (m.width != authored_steps.width || m.height != authored_steps.height) return;
+      const size_t ch = size_t(m.channels);
+      for (size_t t = 0; t < authored_steps.data.size(); ++t) {
+        float v = 0.0f;
+        for (size_t c = 0; c < ch; ++c) v = std::max(v, m.data[t * ch + c]);
+        authored_steps.data[t] += a * v / maps.output_step;
+      }
+    };
+    add(maps.base, 1.0f);
+    for (size_t i = 0; i < maps.lights.size(); ++i) add(maps.contribution[i], authored[i]);
+  }
+  std::vector<uint8_t> light_own_peak(maps.lights.size());
+  for (size_t i = 0; i < maps.lights.size(); ++i)
+    light_own_peak[i] = light_threshold[i] < half_step / authored[i] ? 1 : 0;
+  const bool base_own_peak = base_threshold < half_step;
   // Patches are cut into tiles so that a light reaching a few corners of a large region pays for
   // those corners only; a tile also never exceeds an atlas.
   const int max_dim = std::min(options.max_atlas_size, std::max(options.tile_size, 4));
@@ -378,6 +412,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     MapJob j;
     j.map = &maps.base;
     j.indirect = &maps.base_indirect;
+    j.direct = &maps.base_direct;
+    j.own_peak = base_own_peak;
     j.prototype.kind = kGroupBase;
     j.threshold = base_threshold;
     j.what = "base map";
@@ -387,6 +423,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     MapJob j;
     j.map = &maps.contribution[i];
     if (i < maps.contribution_indirect.size()) j.indirect = &maps.contribution_indirect[i];
+    if (i < maps.contribution_direct.size()) j.direct = &maps.contribution_direct[i];
+    j.own_peak = light_own_peak[i] != 0;
     j.prototype.kind = kGroupContribution;
     j.prototype.light = int(i);
     j.prototype.weight = authored[i];
@@ -436,6 +474,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     MapJob j;
     j.map = &s.map;
     j.indirect = &s.indirect;
+    j.direct = &s.direct;
+    j.own_peak = light_own_peak[size_t(s.light)] != 0;
     j.prototype.kind = kGroupShadow;
     j.prototype.light = s.light;
     j.prototype.object = s.object;
@@ -469,6 +509,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     MapJob j;
     j.map = &p.map;
     j.indirect = &p.indirect;
+    j.direct = &p.direct;
+    j.own_peak = light_own_peak[size_t(p.light)] != 0;
     j.prototype.kind = kGroupPairCorrection;
     j.prototype.light = p.light;
     j.prototype.object = p.object_a;
@@ -496,6 +538,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     MapJob j;
     j.map = &s.map;
     j.indirect = &s.indirect;
+    j.direct = &s.direct;
+    j.own_peak = base_own_peak;
     j.prototype.kind = kGroupStaticShadow;
     j.prototype.object = s.object;
     j.threshold = base_threshold;  // absolute irradiance, like the base map
@@ -538,17 +582,33 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<SplitDecision> split(jobs.size());
   std::vector<std::vector<SourcePatch>> split_patches(jobs.size());  // light-map + indirect parts
   std::vector<ColourDecision> split_colour(jobs.size());
+  // Direct and bounce parts (PackOptions::bounce_tolerance): what each map with a direct part
+  // costs stored whole and as its two parts.
+  struct PartsDecision {
+    bool considered = false, chosen = false;
+    uint64_t whole_bytes = 0, parts_bytes = 0;    // atlas channel-texels, records, quads
+    uint64_t whole_texels = 0, parts_texels = 0;  // destination texels drawn
+  };
+  std::vector<PartsDecision> parts(jobs.size());
   parallel_for(int(jobs.size()), threads, [&](int i) {
     const MapJob& j = jobs[size_t(i)];
+    // How a map is cut: its significance threshold (map units), its level tolerance in output
+    // steps (relative to the job's threshold, half a step) and each texel's factor on it, if any.
+    struct CutRule {
+      float threshold;
+      float steps;
+      const FloatImage* scale = nullptr;
+    };
+    const CutRule whole{j.threshold, options.level_tolerance};
     // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
     // so a patch keeps three channels only where the tint shows above the 8-bit step (B is
     // always 3: authored colours).
     auto cut = [&](const FloatImage& map, const std::vector<Region>& regions, uint8_t target,
-                   std::vector<SourcePatch>& out, ColourDecision& d) {
+                   std::vector<SourcePatch>& out, ColourDecision& d, const CutRule& rule) {
       const size_t first = out.size();
       SourcePatch prototype = j.prototype;
       prototype.target = target;
-      extract_patches(map, regions, j.threshold, max_dim, prototype, j.what, out);
+      extract_patches(map, regions, rule.threshold, max_dim, prototype, j.what, out, rule.scale);
       if (j.prototype.kind != kGroupBase) {
         for (size_t k = first; k < out.size(); ++k) {
           SourcePatch& p = out[k];
@@ -566,7 +626,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       // of a tile with one shadow edge still shrinks. Level 0 first within a job, so that the
       // runtime's runs of one program stay long.
       if (target == kTargetLightMap && options.max_patch_level > 0) {
-        const float steps = 2.0f * options.level_tolerance;  // threshold = half an output step
+        const float tolerance = 2.0f * rule.steps * j.threshold;  // threshold = half a step
         auto bytes = [](const SourcePatch& p) {
           return uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
                  sizeof(pack::PatchRecord) + kPatchDrawBytes;
@@ -574,8 +634,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         // Stores p at the coarsest level its error allows; returns that level.
         auto store_coarsest = [&](SourcePatch& p) {
           SourcePatch reduced;
-          const int level =
-              coarsest_level(p, options.max_patch_level, steps * p.threshold, &reduced);
+          const int level = coarsest_level(p, options.max_patch_level, tolerance, &reduced);
           if (level > 0) p = std::move(reduced);
           return level;
         };
@@ -657,14 +716,74 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     if (!(j.indirect_only && indirect_part)) {
       if (!j.map)
         throw CookError(j.what + ": held as a block image, but the pack has no indirect map");
-      cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)]);
+      const FloatImage* direct =
+          !indirect_part && j.direct && !j.direct->data.empty() ? j.direct : nullptr;
+      if (!direct) {
+        cut(*j.map, layout.regions, kTargetLightMap, plain, colour[size_t(i)], whole);
+      } else {
+        check_map(*direct, layout, 1, j.map->channels, j.what + "'s direct part");
+        const FloatImage& m = *j.map;
+        const size_t n = size_t(m.width) * size_t(m.height);
+        const size_t mc = size_t(m.channels), dc = size_t(direct->channels);
+        // Each texel's tolerance in output steps: bounce light's, but at most the light the
+        // authored image shows there (a blur lifts dark corners: every map's error adds up there)
+        // and at least the level tolerance; the level tolerance where the direct part shows
+        // (above the level at which cut pieces keep dim light).
+        const float bounce_steps = j.own_peak ? options.level_tolerance : options.bounce_tolerance;
+        const float dim = kCutKeepFraction * j.threshold;
+        FloatImage whole_scale(m.width, m.height, 1), bounce_scale(m.width, m.height, 1);
+        for (size_t t = 0; t < n; ++t) {
+          float d = 0.0f;
+          for (size_t c = 0; c < dc; ++c) d = std::max(d, std::fabs(direct->data[t * dc + c]));
+          const float shown = authored_steps.data.empty() ? 0.0f : authored_steps.data[t];
+          const float steps = std::clamp(shown, options.level_tolerance, bounce_steps);
+          whole_scale.data[t] = d > dim ? 1.0f : steps / options.level_tolerance;
+          bounce_scale.data[t] = steps / options.level_tolerance;
+        }
+        // The bounce part: the map less the direct part (a grey part in every channel).
+        FloatImage bounce = m;
+        for (size_t t = 0; t < n; ++t)
+          for (size_t c = 0; c < mc; ++c)
+            bounce.data[t * mc + c] -= direct->data[t * dc + (dc == mc ? c : 0)];
+        std::vector<SourcePatch> split_into;
+        ColourDecision split_colours;
+        cut(m, layout.regions, kTargetLightMap, plain, colour[size_t(i)],
+            CutRule{j.threshold, options.level_tolerance, &whole_scale});
+        cut(*direct, layout.regions, kTargetLightMap, split_into, split_colours, whole);
+        // Significant from a fraction of the threshold: each part alone drops its dim tail,
+        // which the whole map carried beside the other part's light.
+        cut(bounce, layout.regions, kTargetLightMap, split_into, split_colours,
+            CutRule{kBounceThresholdFraction * j.threshold, options.level_tolerance,
+                    &bounce_scale});
+        PartsDecision& pd = parts[size_t(i)];
+        pd.considered = true;
+        auto weigh = [](const std::vector<SourcePatch>& v, uint64_t* bytes, uint64_t* texels) {
+          for (const SourcePatch& p : v) {
+            *bytes += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
+                      sizeof(pack::PatchRecord) + kPatchDrawBytes;
+            *texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+          }
+        };
+        weigh(plain, &pd.whole_bytes, &pd.whole_texels);
+        weigh(split_into, &pd.parts_bytes, &pd.parts_texels);
+        pd.chosen = options.always_parts ||
+                    double(pd.parts_bytes) + kDrawTexelBytes * double(pd.parts_texels) <
+                        double(pd.whole_bytes) + kDrawTexelBytes * double(pd.whole_texels);
+        if (pd.chosen) {
+          std::stable_sort(
+              split_into.begin(), split_into.end(),
+              [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
+          plain = std::move(split_into);
+          colour[size_t(i)] = split_colours;
+        }
+      }
     }
     SplitDecision& sd = split[size_t(i)];
     sd.plain = cost(plain);
     if (indirect_part) {
       std::vector<SourcePatch> indirect;
       // A grey map's bounce part is grey too (one channel where the bounce is untinted).
-      cut(*j.indirect, coarse, kTargetIndirectMap, indirect, split_colour[size_t(i)]);
+      cut(*j.indirect, coarse, kTargetIndirectMap, indirect, split_colour[size_t(i)], whole);
       // A pane is bounce light alone, smooth, and has no light-map part to take back what a
       // coarser level blurs: stored at options.pane_level (pack_format.h, "Magnified patches").
       if (j.indirect_only && options.pane_level > 0) {
@@ -680,7 +799,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         for (size_t k = 0; k < indirect.size(); ++k)
           add_decoded(indirect[k], indirect_q[k], decoded);
         cut(light_map_part(*j.map, decoded, scale), layout.regions, kTargetLightMap, detail,
-            split_colour[size_t(i)]);
+            split_colour[size_t(i)], whole);
       }
       sd.detail = cost(detail);
       sd.indirect = cost(indirect);
@@ -1023,6 +1142,47 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
          "stays within level_tolerance_steps 8-bit output steps of the patch at every texel and "
          "channel; a level stores the means of 2^level x 2^level texel blocks, magnified "
          "bilinearly inside the patch by the runtime"}};
+    {
+      nlohmann::json per = nlohmann::json::array();
+      int considered = 0, chosen = 0;
+      uint64_t whole_bytes = 0, stored_bytes = 0, whole_texels = 0, stored_texels = 0;
+      for (size_t i = 0; i < jobs.size(); ++i) {
+        const PartsDecision& d = parts[i];
+        if (!d.considered) continue;
+        ++considered;
+        chosen += d.chosen ? 1 : 0;
+        whole_bytes += d.whole_bytes;
+        whole_texels += d.whole_texels;
+        stored_bytes += d.chosen ? d.parts_bytes : d.whole_bytes;
+        stored_texels += d.chosen ? d.parts_texels : d.whole_texels;
+        per.push_back({{"map", jobs[i].what},
+                       {"parts", d.chosen},
+                       {"whole_bytes", d.whole_bytes},
+                       {"parts_bytes", d.parts_bytes},
+                       {"whole_texels", d.whole_texels},
+                       {"parts_texels", d.parts_texels}});
+      }
+      j["direct_and_bounce_parts"] = {
+          {"bounce_tolerance_steps", options.bounce_tolerance},
+          {"bounce_threshold_fraction", kBounceThresholdFraction},
+          {"draw_texel_bytes", kDrawTexelBytes},
+          {"maps_with_direct_part", considered},
+          {"maps_in_parts", chosen},
+          {"bytes_whole", whole_bytes},
+          {"bytes_stored", stored_bytes},
+          {"texels_whole", whole_texels},
+          {"texels_stored", stored_texels},
+          {"maps", per},
+          {"rule",
+           "a map with a direct part: texels whose direct light stays below a fifth of the "
+           "threshold take bounce_tolerance_steps instead of level_tolerance_steps, at most the "
+           "output steps the authored image shows there and at least level_tolerance_steps; the "
+           "map is stored as its direct part's patches plus its bounce part's (the map less the "
+           "direct part, significant from bounce_threshold_fraction of the threshold, within that "
+           "tolerance at every texel) where that costs less: bytes (atlas channel-texels, records, "
+           "a quad each) plus draw_texel_bytes per destination texel; a map whose threshold is a "
+           "step of its own peak keeps level_tolerance_steps"}};
+    }
     j["patches_by_target"] = {{"light_map", count[0]}, {"indirect_map", count[1]}};
     j["texels_by_target"] = {{"light_map", texels[0]}, {"indirect_map", texels[1]}};
     nlohmann::json& im = j["indirect_map"];

@@ -39,7 +39,7 @@ bool significant_box(const FloatImage& map, const Rect& r, float sign, float thr
 
 void extract_patches(const FloatImage& map, const std::vector<Region>& regions, float threshold,
                      int max_dim, const SourcePatch& prototype, const std::string& what,
-                     std::vector<SourcePatch>& out) {
+                     std::vector<SourcePatch>& out, const FloatImage* tolerance_scale) {
   if (map.channels != 1 && map.channels != 3) {
     throw CookError(what + ": a map must have 1 or 3 channels, has " +
                     std::to_string(map.channels));
@@ -52,6 +52,9 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
                       std::to_string(t / size_t(map.width)) + ")");
     }
   }
+  if (tolerance_scale && (tolerance_scale->width != map.width ||
+                          tolerance_scale->height != map.height || tolerance_scale->channels != 1))
+    throw CookError(what + ": its tolerance scale does not match the map");
   for (const Region& region : regions) {
     // Clip the region to the map.
     const int rx0 = std::max(region.rect.x, 0), ry0 = std::max(region.rect.y, 0);
@@ -75,6 +78,12 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
           p.threshold = threshold;
           p.values.assign(size_t(r.w) * r.h * map.channels, 0.0f);
           p.significant.assign(size_t(r.w) * r.h, 0);
+          if (tolerance_scale) {
+            p.tolerance_scale.resize(size_t(r.w) * r.h);
+            for (int y = 0; y < r.h; ++y)
+              for (int x = 0; x < r.w; ++x)
+                p.tolerance_scale[size_t(y) * r.w + x] = tolerance_scale->at(r.x + x, r.y + y, 0);
+          }
           for (int y = 0; y < r.h; ++y) {
             for (int x = 0; x < r.w; ++x) {
               for (int c = 0; c < map.channels; ++c) {
@@ -118,6 +127,7 @@ void reduce_patch(SourcePatch& patch, int level) {
   }
   patch.values = std::move(values);
   patch.significant = std::move(significant);
+  patch.tolerance_scale.clear();  // checked at level 0 only
 }
 
 int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
@@ -141,7 +151,10 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
         const size_t c = (size_t(ty.i1) * sw + tx.i0) * ch, d = (size_t(ty.i1) * sw + tx.i1) * ch;
         for (int k = 0; k < ch; ++k) {
           const float m = magnify_blend(v[a + k], v[b + k], v[c + k], v[d + k], tx.t, ty.t);
-          if (!(std::fabs(m - patch.values[(size_t(y) * w + x) * ch + k]) <= tolerance)) {
+          const float at = patch.tolerance_scale.empty()
+                               ? tolerance
+                               : tolerance * patch.tolerance_scale[size_t(y) * w + x];
+          if (!(std::fabs(m - patch.values[(size_t(y) * w + x) * ch + k]) <= at)) {
             within = false;
             break;
           }
@@ -183,10 +196,13 @@ std::vector<SourcePatch> cut_patch(const SourcePatch& patch, const std::vector<R
     q.dest = Rect{patch.dest.x + x0, patch.dest.y + y0, x1 - x0 + 1, y1 - y0 + 1};
     q.values.assign(size_t(q.dest.w) * q.dest.h * ch, 0.0f);
     q.significant.assign(size_t(q.dest.w) * q.dest.h, 0);
+    const bool scaled = !patch.tolerance_scale.empty();
+    if (scaled) q.tolerance_scale.assign(size_t(q.dest.w) * q.dest.h, 1.0f);
     for (int y = 0; y < q.dest.h; ++y)
       for (int x = 0; x < q.dest.w; ++x) {
         const size_t from = size_t(y0 + y) * w + size_t(x0 + x), to = size_t(y) * q.dest.w + x;
         q.significant[to] = patch.significant[from];
+        if (scaled) q.tolerance_scale[to] = patch.tolerance_scale[from];
         for (int c = 0; c < ch; ++c) q.values[to * ch + c] = patch.values[from * ch + c];
       }
     out.push_back(std::move(q));

@@ -29,6 +29,9 @@ struct SourcePatch {
   // Per stored texel: 1 where the value (of this patch's sign) is significant; errors are
   // measured there.
   std::vector<uint8_t> significant;
+  // Per texel of a level-0 patch, a factor on coarsest_level()'s tolerance (empty: 1 everywhere):
+  // the pack builder's looser tolerance for texels that hold bounce light alone.
+  std::vector<float> tolerance_scale;
   float weight = 1.0f;     // to final-map units at the authored state (a_l for C_l/S_ol, 1 for B)
   float threshold = 0.0f;  // significance threshold in this map's units (half an output step)
 
@@ -41,10 +44,12 @@ struct SourcePatch {
 // a = 1 for B, a = the light's authored max(colour) * intensity for C_l and S_ol, floored at 1/100
 // of the brightest light's, as the baker does). Values below it round away in the 8-bit output.
 // Patches larger than max_dim are cut into tiles; each tile is shrunk to its own significant box.
-// Throws CookError on a non-finite value (naming `what` and the texel).
+// `tolerance_scale` (optional, 1 channel, the map's size) gives each patch texel its
+// SourcePatch::tolerance_scale. Throws CookError on a non-finite value (naming `what` and the
+// texel).
 void extract_patches(const FloatImage& map, const std::vector<Region>& regions, float threshold,
                      int max_dim, const SourcePatch& prototype, const std::string& what,
-                     std::vector<SourcePatch>& out);
+                     std::vector<SourcePatch>& out, const FloatImage* tolerance_scale = nullptr);
 
 // Stores a level-0 patch at `level` (1..pack::kMaxPatchLevel): each stored texel is the mean of
 // its 2^level x 2^level block of the patch's texels (the blocks at the right and bottom edges
@@ -56,11 +61,12 @@ void reduce_patch(SourcePatch& patch, int level);
 
 // The coarsest level in [1, max_level] (at most pack::kMaxPatchLevel) at which `patch` (level 0),
 // stored as reduce_patch() stores it and magnified by the runtime's rule (patch_accumulate.h,
-// magnify_tap), stays within `tolerance` (this map's units) of its own values at every texel and
-// channel of its rectangle; levels are tried from 1 up and the first that fails ends the search.
-// 0 when level 1 fails (or max_level < 1). Quantization is not included: the 8-bit codes add
-// their own half step either way. With `coarsest` and a level > 0, *coarsest is the patch stored
-// at that level (what reduce_patch() makes of it), so a caller keeps what was checked.
+// magnify_tap), stays within `tolerance` (this map's units; times the texel's tolerance_scale
+// where the patch has one) of its own values at every texel and channel of its rectangle; levels
+// are tried from 1 up and the first that fails ends the search. 0 when level 1 fails (or max_level
+// < 1). Quantization is not included: the 8-bit codes add their own half step either way. With
+// `coarsest` and a level > 0, *coarsest is the patch stored at that level (what reduce_patch()
+// makes of it), so a caller keeps what was checked.
 int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
                    SourcePatch* coarsest = nullptr);
 
@@ -83,6 +89,13 @@ constexpr int kMinLevelTile = 8;
 // floor, at 16 bytes a patch 1.41x (47,729 patches), at 32 1.25-1.28x (31,707; the uncut pack
 // 1.21-1.32x in the same session).
 constexpr uint64_t kPatchDrawBytes = 32;
+// What drawing one destination texel costs, in atlas bytes, where the pack builder weighs
+// storing a map as one set of patches or as its direct and bounce parts (both parts draw the
+// texels they share). kPatchDrawBytes over the texels of fill a quad costs on llvmpipe (some 60)
+// would be 0.5. The full inn at preview: at 0, 1.262x a conventional map's bytes and 10.19 M
+// texels a full rebuild; at 0.25, 1.296x and 10.03 M; at 0.5, 1.319x and 9.94 M (whole maps:
+// 1.509x, 9.31 M); its costliest light change 614,778 texels at all three (611,432 whole).
+constexpr double kDrawTexelBytes = 0.25;
 
 // A cut piece keeps the box of its texels above this fraction of the patch's threshold (a tenth
 // of an output step), not only of its significant ones: a patch's rectangle carried the dim light

@@ -375,17 +375,27 @@ void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
   // Every map whole, bounce light included, whether or not the pack stores its bounce part on
   // the indirect map: the light map then holds the difference (map_split.h), and the block
   // images need none (block_image() fills their rings).
+  // Direct parts too (ShadowMap::direct): finalizing is linear, so the bounce part the pack
+  // takes as the difference is the finalized map's.
   std::vector<FloatImage*> all{&maps.base};
   for (FloatImage& c : maps.contribution) all.push_back(&c);
   for (ShadowMap& s : maps.shadows) all.push_back(&s.map);
   for (PairCorrectionMap& p : maps.pair_corrections) all.push_back(&p.map);
   for (StaticShadowMap& s : maps.static_shadows) all.push_back(&s.map);
+  std::vector<FloatImage*> direct{&maps.base_direct};
+  for (FloatImage& c : maps.contribution_direct) direct.push_back(&c);
+  for (ShadowMap& s : maps.shadows) direct.push_back(&s.direct);
+  for (PairCorrectionMap& p : maps.pair_corrections) direct.push_back(&p.direct);
+  for (StaticShadowMap& s : maps.static_shadows) direct.push_back(&s.direct);
+  for (FloatImage* d : direct)
+    if (!d->data.empty()) all.push_back(d);
   for (PaneMap& p : maps.panes)
     if (!p.map.data.empty()) all.push_back(&p.map);  // else its block image alone (PaneMap)
-  for (FloatImage* m : all) {
-    finalize_map(*m, scene, layout, texels);
+  // Each map alone: both cores.
+  parallel_for(int(all.size()), worker_count(0), [&](int i) {
+    finalize_map(*all[size_t(i)], scene, layout, texels);
     if (progress) progress->advance();
-  }
+  });
 }
 
 }  // namespace lightpatch::cooker

@@ -97,6 +97,8 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.bake.pane_level = args.int_option("--pane-level", -1, 0, int(pack::kMaxPatchLevel));
   o.bake.max_patch_level = args.int_option("--max-patch-level", -1, 0, int(pack::kMaxPatchLevel));
   o.bake.level_tolerance = args.float_option("--level-tolerance", 0.0f, 0.01f, kMaxLevelTolerance);
+  o.bake.bounce_tolerance =
+      args.float_option("--bounce-tolerance", 0.0f, 0.01f, kMaxLevelTolerance);
   o.quiet = args.flag("--quiet", "-q");
   o.layout.align = layout_align(o.bake);
   o.layout.align_required = o.bake.indirect_scale > 0;

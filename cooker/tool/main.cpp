@@ -77,6 +77,11 @@ constexpr const char* kCookOptionsHelp =
     "                         patches\")\n"
     "  --level-tolerance S    that tolerance in 8-bit output steps of the authored state,\n"
     "                         0.01-16 (default 1: about the 8-bit rounding's own error)\n"
+    "  --bounce-tolerance S   the same for texels of bounce light alone, at most the steps\n"
+    "                         the authored image shows there, 0.01-16, at least\n"
+    "                         --level-tolerance (default 4); each map is also stored as its\n"
+    "                         direct part and its bounce part within it, where that costs\n"
+    "                         less (README, \"Direct and bounce parts\")\n"
     "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
     "                         the scene's 99th percentile / 255, rounded down to a quarter\n"
     "                         octave); pinned, edits keep the jobs they cannot change (plan)\n"
@@ -245,8 +250,8 @@ const Verb kVerbs[] = {
      "[--measure-plan] [--write-gltf OUT.glb] [--unwrap auto|always|never] [--integrator gather] "
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--area-samples N] [--texel-samples N] "
      "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--panes N] "
-     "[--pane-level L] [--max-patch-level L] [--level-tolerance S] [--seed N] [--threads N] "
-     "[--quiet]",
+     "[--pane-level L] [--max-patch-level L] [--level-tolerance S] [--bounce-tolerance S] "
+     "[--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,

@@ -182,7 +182,8 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
                              "--panes",
                              "--pane-level",
                              "--max-patch-level",
-                             "--level-tolerance"}) {
+                             "--level-tolerance",
+                             "--bounce-tolerance"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
   const ToolRun bake_state = expect_success({"bake-state", "--help"});

@@ -712,6 +712,46 @@ TEST(HardCases, IndirectMapHoldsTheBounceLightAndRecomposesLikeBakeState) {
   RecordProperty("worst_relative_rmse", std::to_string(expect_standard_states_match(c)));
 }
 
+// Two packs of the same scene recomposed in one state, at every valid texel: relative RMSE and
+// signed bias of `b` against `a`, and the largest difference in output steps beyond 1 % of the
+// texel (the 8-bit codes' own rounding grows with the patch's brightest texel, and each pack
+// rounds its patches: counted apart).
+struct PackDifference {
+  double rmse = 0.0, bias = 0.0, worst_steps = 0.0;
+};
+
+PackDifference compare_packs(const PackView& pa, const PackView& pb, const NamedState& st,
+                             const TexelSet& texels, double step) {
+  PackDifference r;
+  CpuRecomposer a, b;
+  SceneState sa, sb;
+  Error error;
+  EXPECT_EQ(a.init(pa, &error), Status::kOk);
+  EXPECT_EQ(b.init(pb, &error), Status::kOk);
+  EXPECT_EQ(sa.init(pa, &error), Status::kOk);
+  EXPECT_EQ(sb.init(pb, &error), Status::kOk);
+  apply_spec(pa, st.spec, &sa);
+  apply_spec(pb, st.spec, &sb);
+  EXPECT_EQ(a.apply(sa), Status::kOk);
+  EXPECT_EQ(b.apply(sb), Status::kOk);
+  double diff = 0.0, sum = 0.0, d2 = 0.0, r2 = 0.0;
+  for (size_t t = 0; t < texels.valid.size(); ++t) {
+    if (!texels.valid[t]) continue;
+    for (size_t k = 0; k < 3; ++k) {
+      const double x = a.rgb()[t * 3 + k], y = b.rgb()[t * 3 + k];
+      r.worst_steps =
+          std::max(r.worst_steps, std::max(0.0, std::fabs(y - x) - 0.01 * std::fabs(x)) / step);
+      diff += y - x;
+      sum += x;
+      d2 += (y - x) * (y - x);
+      r2 += x * x;
+    }
+  }
+  r.rmse = r2 > 0.0 ? std::sqrt(d2 / r2) : 0.0;
+  r.bias = sum > 0.0 ? diff / sum : 0.0;
+  return r;
+}
+
 // Light-map patches at the coarsest level their own error allows (PackOptions::max_patch_level,
 // the default) against every patch texel for texel: fewer atlas bytes, the bounce light's
 // patches magnified, and every state recomposes like bake_state and within a few output steps of
@@ -722,8 +762,12 @@ TEST(HardCases, LightMapPatchLevelsSaveBytesAndRecomposeLikeBakeState) {
   two_rooms(levels.scene);
   PackOptions po0;
   po0.max_patch_level = 0;
+  // The level tolerance alone, bounce light's texels too (the parts' test has the bounce
+  // tolerance's own bars).
+  PackOptions po;
+  po.bounce_tolerance = po.level_tolerance;
   cook(full, 128, draft(true), po0);
-  cook(levels, 128, draft(true));
+  cook(levels, 128, draft(true), po);
   ASSERT_FALSE(HasFatalFailure());
   auto atlas_bytes = [](const PackView& v) {
     uint64_t b = 0;
@@ -748,42 +792,97 @@ TEST(HardCases, LightMapPatchLevelsSaveBytesAndRecomposeLikeBakeState) {
   expect_standard_states_match(full);
   expect_standard_states_match(levels);
   // The two packs' recompositions, state by state, in output steps at every valid texel.
-  CpuRecomposer a, b;
-  Error error;
-  ASSERT_EQ(a.init(full.pack, &error), Status::kOk);
-  ASSERT_EQ(b.init(levels.pack, &error), Status::kOk);
   const double step = full.maps.output_step;
   ASSERT_EQ(step, levels.maps.output_step);
   for (const NamedState& st : standard_states(full.scene)) {
-    SceneState sa, sb;
-    ASSERT_EQ(sa.init(full.pack, &error), Status::kOk);
-    ASSERT_EQ(sb.init(levels.pack, &error), Status::kOk);
-    apply_spec(full.pack, st.spec, &sa);
-    apply_spec(levels.pack, st.spec, &sb);
-    ASSERT_EQ(a.apply(sa), Status::kOk);
-    ASSERT_EQ(b.apply(sb), Status::kOk);
-    double worst = 0.0, diff = 0.0, sum = 0.0, d2 = 0.0, r2 = 0.0;
-    for (size_t t = 0; t < full.texels.valid.size(); ++t) {
-      if (!full.texels.valid[t]) continue;
-      for (size_t k = 0; k < 3; ++k) {
-        const double x = a.rgb()[t * 3 + k], y = b.rgb()[t * 3 + k];
-        // The 8-bit codes' own rounding grows with the patch's brightest texel (each pack
-        // rounds its patches): counted apart as 1 % of the texel.
-        worst = std::max(worst, std::max(0.0, std::fabs(y - x) - 0.01 * std::fabs(x)) / step);
-        diff += y - x;
-        sum += x;
-        d2 += (y - x) * (y - x);
-        r2 += x * x;
-      }
-    }
-    const double rmse = r2 > 0.0 ? std::sqrt(d2 / r2) : 0.0, bias = sum > 0.0 ? diff / sum : 0.0;
+    const PackDifference d = compare_packs(full.pack, levels.pack, st, full.texels, step);
     std::printf(
         "  %-24s levels against level 0: relative RMSE %.4f%%, bias %+.4f%%, largest "
         "texel difference %.2f output steps beyond 1 %% of the texel\n",
-        st.name.c_str(), 100.0 * rmse, 100.0 * bias, worst);
-    EXPECT_LT(rmse, 0.005) << st.name;
-    EXPECT_LT(std::fabs(bias), 0.002) << st.name;
-    EXPECT_LT(worst, 4.0) << st.name;
+        st.name.c_str(), 100.0 * d.rmse, 100.0 * d.bias, d.worst_steps);
+    EXPECT_LT(d.rmse, 0.005) << st.name;
+    EXPECT_LT(std::fabs(d.bias), 0.002) << st.name;
+    EXPECT_LT(d.worst_steps, 4.0) << st.name;
+  }
+}
+
+// The maps' direct parts dropped: packs as they were before maps were stored in parts.
+void drop_direct_parts(BakedMaps& m) {
+  m.base_direct = FloatImage();
+  for (FloatImage& c : m.contribution_direct) c = FloatImage();
+  for (ShadowMap& s : m.shadows) s.direct = FloatImage();
+  for (PairCorrectionMap& p : m.pair_corrections) p.direct = FloatImage();
+  for (StaticShadowMap& s : m.static_shadows) s.direct = FloatImage();
+}
+
+// Maps with bounce light are stored as their direct and bounce parts where that costs less
+// (PackOptions::bounce_tolerance), or always (PackOptions::always_parts): the same light as the
+// whole maps' pack within the bounce tolerance at every texel, bake_state's within the pack's
+// bar, and by default fewer bytes.
+TEST(HardCases, DirectAndBouncePartsSaveBytesAndStayWithinTheBounceTolerance) {
+  Cooked parts;
+  two_rooms(parts.scene);
+  cook(parts, 256, draft(true));
+  ASSERT_FALSE(HasFatalFailure());
+  // The bake kept each map's direct part: bounce light on a layout without blocks; grey (one
+  // channel) for a light, the static lights' colours for the base map.
+  ASSERT_EQ(parts.layout.align, 1);
+  ASSERT_EQ(parts.maps.base_direct.channels, 3);
+  ASSERT_EQ(parts.maps.contribution_direct.size(), parts.maps.contribution.size());
+  ASSERT_FALSE(parts.maps.contribution_direct.empty());
+  for (const FloatImage& d : parts.maps.contribution_direct) EXPECT_EQ(d.channels, 1);
+  // The same maps without their direct parts (the pack as it was), and every map in parts.
+  BakedMaps whole_maps = parts.maps;
+  drop_direct_parts(whole_maps);
+  PackOptions always;
+  always.always_parts = true;
+  Report whole_report, always_report;
+  const std::vector<uint8_t> whole_bytes =
+      build_pack(parts.scene, parts.layout, whole_maps, PackOptions{}, whole_report);
+  const std::vector<uint8_t> always_bytes =
+      build_pack(parts.scene, parts.layout, parts.maps, always, always_report);
+  PackView whole, all_parts;
+  Error error;
+  for (auto [bytes, view] : {std::pair{&whole_bytes, &whole}, std::pair{&always_bytes, &all_parts}})
+    ASSERT_EQ(
+        PackView::open(bytes->data(), bytes->size(), RecomposeLimits::format_only(), view, &error),
+        Status::kOk)
+        << error.message;
+  auto atlas_bytes = [](const PackView& v) {
+    uint64_t b = 0;
+    for (uint32_t a = 0; a < v.atlas_count(); ++a)
+      b += uint64_t(v.atlas(a).width) * v.atlas(a).height * 4;
+    return b;
+  };
+  const nlohmann::json& d = parts.report.root()["pack"]["direct_and_bounce_parts"];
+  const nlohmann::json& da = always_report.root()["pack"]["direct_and_bounce_parts"];
+  EXPECT_TRUE(whole_report.root()["pack"]["direct_and_bounce_parts"]["maps"].empty());
+  std::printf(
+      "atlas bytes: whole maps %llu, default %llu (%.3fx; %d of %d maps in parts), every map in "
+      "parts %llu\n",
+      (unsigned long long)atlas_bytes(whole), (unsigned long long)atlas_bytes(parts.pack),
+      double(atlas_bytes(parts.pack)) / double(atlas_bytes(whole)), d["maps_in_parts"].get<int>(),
+      d["maps_with_direct_part"].get<int>(), (unsigned long long)atlas_bytes(all_parts));
+  EXPECT_EQ(d["maps_with_direct_part"].get<int>(), 4);  // B, C_lamp, S_crate,lamp, B - B_crate
+  EXPECT_GT(d["maps_in_parts"].get<int>(), 0);
+  EXPECT_EQ(da["maps_in_parts"].get<int>(), 4);
+  EXPECT_LT(double(atlas_bytes(parts.pack)), 0.9 * double(atlas_bytes(whole)));  // 0.804x
+  expect_standard_states_match(parts);
+  // Against the whole maps' pack, state by state, in output steps at every valid texel: within
+  // the bounce part's tolerance, the direct part's and the whole pack's level tolerance (1 each)
+  // and three patches' rounding (half a step each, and 1 % of the texel).
+  for (const PackView* pv : {&parts.pack, &all_parts}) {
+    for (const NamedState& st : standard_states(parts.scene)) {
+      const PackDifference d = compare_packs(whole, *pv, st, parts.texels, parts.maps.output_step);
+      std::printf(
+          "  %-12s %-24s against whole maps: relative RMSE %.4f%%, bias %+.4f%%, largest texel "
+          "difference %.2f output steps beyond 1 %% of the texel\n",
+          pv == &all_parts ? "all parts" : "default", st.name.c_str(), 100.0 * d.rmse,
+          100.0 * d.bias, d.worst_steps);
+      EXPECT_LT(d.rmse, 0.015) << st.name;  // 0.93 % every map in parts, lamp off (dim)
+      EXPECT_LT(std::fabs(d.bias), 0.002) << st.name;
+      EXPECT_LT(d.worst_steps, kDefaultBounceTolerance + 3.5) << st.name;
+    }
   }
 }
 

@@ -148,6 +148,35 @@ TEST(CoarsestLevel, ASharpEdgeStaysAtFullResolutionAndAFlatPatchGoesToTheTop) {
   EXPECT_THROW(coarsest_level(reduced, 2, 1.0f), CookError);
 }
 
+// A texel's tolerance scale (the pack builder's looser tolerance where a map holds bounce light
+// alone) lets the magnification blur there, and only there.
+TEST(CoarsestLevel, ATexelsToleranceScaleLoosensItsBoundAlone) {
+  SourcePatch edge = ramp_x(16, 16, 0.0f);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 9; x < 16; ++x) edge.values[size_t(y) * 16 + x] = 102.0f;  // a 2-unit step
+  EXPECT_EQ(coarsest_level(edge, 3, 0.5f), 0);
+  // Loose (x8) everywhere: the step's blur (at most 2) is within 4.
+  edge.tolerance_scale.assign(16 * 16, 8.0f);
+  EXPECT_EQ(coarsest_level(edge, 1, 0.5f), 1);
+  // Strict at one texel beside the step: level 0 again.
+  edge.tolerance_scale[size_t(4) * 16 + 9] = 1.0f;
+  EXPECT_EQ(coarsest_level(edge, 1, 0.5f), 0);
+  // Strict far from the step, where the magnification is exact: level 1 stays.
+  edge.tolerance_scale[size_t(4) * 16 + 9] = 8.0f;
+  edge.tolerance_scale[size_t(4) * 16 + 2] = 1.0f;
+  EXPECT_EQ(coarsest_level(edge, 1, 0.5f), 1);
+  // Cut pieces keep their texels' scales; a reduced patch drops them (checked at level 0 only).
+  edge.threshold = 1.0f;
+  const std::vector<SourcePatch> cut = cut_patch(edge, {Rect{2, 3, 8, 4}});
+  ASSERT_EQ(cut.size(), 1u);
+  ASSERT_EQ(cut[0].tolerance_scale.size(), size_t(8 * 4));
+  EXPECT_EQ(cut[0].tolerance_scale[size_t(1) * 8 + 0], 1.0f);  // texel (2, 4) of the patch
+  EXPECT_EQ(cut[0].tolerance_scale[0], 8.0f);
+  SourcePatch reduced = edge;
+  reduce_patch(reduced, 1);
+  EXPECT_TRUE(reduced.tolerance_scale.empty());
+}
+
 // Two charts side by side in one region (a 2-texel gap between them), lit 2 and 50: the step at
 // their border keeps the whole patch at level 0, while each chart alone is flat.
 TEST(SplitByCharts, EachChartIsCutOnItsOwnAndMagnifiedAlone) {

@@ -48,9 +48,10 @@ GroupBake light_group() {
   g.seconds = 1.5;
   g.map = corner_map(3, 0.5f);
   g.indirect = block_image(0.25f);
-  g.shadows.push_back({1, 0, corner_map(1, 0.01f), {}});
-  g.shadows.push_back({1, 3, FloatImage(kW, kH, 3), block_image(-0.5f)});  // map all zero
-  g.pair_corrections.push_back({1, 0, 3, corner_map(3, -0.02f), {}});
+  // The first shadow has a direct part (ShadowMap::direct; one channel in a light group).
+  g.shadows.push_back({1, 0, corner_map(1, 0.01f), {}, corner_map(1, 0.004f)});
+  g.shadows.push_back({1, 3, FloatImage(kW, kH, 3), block_image(-0.5f), {}});  // map all zero
+  g.pair_corrections.push_back({1, 0, 3, corner_map(3, -0.02f), {}, {}});
   Decision d;
   d.kind = DecisionKind::kOverlap;
   d.stage = DecisionStage::kTraced;
@@ -119,6 +120,19 @@ std::string refusal(const std::vector<uint8_t>& f, const GroupFileExpect& e) {
   return "";
 }
 
+// The reader's refusal of `f` with the map record at `at` changed by `change` (and resealed).
+template <typename F>
+std::string refusal_of_edit(const std::vector<uint8_t>& f, size_t at, const GroupFileExpect& e,
+                            F&& change) {
+  std::vector<uint8_t> bad = f;
+  MapRecord r;
+  std::memcpy(&r, bad.data() + at, sizeof r);
+  change(r);
+  std::memcpy(bad.data() + at, &r, sizeof r);
+  reseal(bad);
+  return refusal(bad, e);
+}
+
 TEST(GroupFile, LightGroupRoundTripsBitForBit) {
   const GroupBake g = light_group();
   const std::vector<uint8_t> f = encode_group(g, kHash);
@@ -133,7 +147,10 @@ TEST(GroupFile, LightGroupRoundTripsBitForBit) {
     EXPECT_EQ(back.shadows[i].object, g.shadows[i].object);
     expect_same_bits(back.shadows[i].map, g.shadows[i].map);
     expect_same_bits(back.shadows[i].indirect, g.shadows[i].indirect);
+    expect_same_bits(back.shadows[i].direct, g.shadows[i].direct);
   }
+  EXPECT_FALSE(back.shadows[0].direct.data.empty());
+  EXPECT_TRUE(back.pair_corrections[0].direct.data.empty());
   EXPECT_TRUE(back.shadows[0].indirect.data.empty());
   EXPECT_TRUE(back.pair_corrections[0].indirect.data.empty());
   ASSERT_EQ(back.pair_corrections.size(), 1u);
@@ -165,13 +182,14 @@ TEST(GroupFile, StaticGroupRoundTrips) {
   GroupBake g;
   g.group = 0;
   g.map = corner_map(3, 2.0f);
-  g.static_shadows.push_back({2, corner_map(3, 0.1f), block_image(1.0f)});
+  g.static_shadows.push_back({2, corner_map(3, 0.1f), block_image(1.0f), corner_map(3, 0.05f)});
   const std::vector<uint8_t> f = encode_group(g, kHash);
   const GroupBake back = decode_group(f.data(), f.size(), expect_for(g));
   ASSERT_EQ(back.static_shadows.size(), 1u);
   EXPECT_EQ(back.static_shadows[0].object, 2);
   expect_same_bits(back.static_shadows[0].map, g.static_shadows[0].map);
   expect_same_bits(back.static_shadows[0].indirect, g.static_shadows[0].indirect);
+  expect_same_bits(back.static_shadows[0].direct, g.static_shadows[0].direct);
   expect_same_bits(back.map, g.map);
 }
 
@@ -184,6 +202,36 @@ TEST(GroupFile, IndirectPartsOfAnotherBlockSizeAreRefused) {
   e = expect_for(g);
   e.indirect_width = kBlocksW + 1;
   EXPECT_NE(refusal(f, e).find("indirect part does not match"), std::string::npos) << refusal(f, e);
+}
+
+TEST(GroupFile, DirectPartsMustMatchTheirMapAndGroup) {
+  const GroupBake g = light_group();
+  const GroupFileExpect e = expect_for(g);
+  const std::vector<uint8_t> f = encode_group(g, kHash);
+  // The own map, its indirect part, then the first shadow and its direct part.
+  const size_t part = after_record(f, sizeof(GroupFileHeader));
+  const size_t shadow = after_record(f, part);
+  const size_t direct = after_record(f, shadow);
+  MapRecord r;
+  std::memcpy(&r, f.data() + shadow, sizeof r);
+  ASSERT_EQ(r.parts, 4u);
+  std::memcpy(&r, f.data() + direct, sizeof r);
+  ASSERT_EQ(r.parts, 8u);
+  ASSERT_EQ(r.channels, 1u);
+  auto edit = [&](size_t at, auto&& change) { return refusal_of_edit(f, at, e, change); };
+  EXPECT_NE(edit(direct, [](MapRecord& m) { m.object = 1; }).find("direct part does not match"),
+            std::string::npos);
+  EXPECT_NE(edit(direct, [](MapRecord& m) { m.width = kW / 2; }).find("direct part"),
+            std::string::npos);
+  EXPECT_NE(edit(direct, [](MapRecord& m) { m.parts = 2; }).find("direct part does not match"),
+            std::string::npos);
+  EXPECT_NE(edit(shadow, [](MapRecord& m) { m.parts = 16; }).find("bad part flags"),
+            std::string::npos);
+  // A light group's direct part is grey: three channels are refused (read as a wrong record).
+  GroupBake coloured = light_group();
+  coloured.shadows[0].direct = corner_map(3, 0.004f);
+  const std::vector<uint8_t> c = encode_group(coloured, kHash);
+  EXPECT_NE(refusal(c, e).find("direct part does not match"), std::string::npos) << refusal(c, e);
 }
 
 TEST(GroupFile, EveryTruncationIsRefused) {
@@ -212,15 +260,7 @@ TEST(GroupFile, CraftedFilesWithAValidChecksumAreRefusedByTheirContent) {
   const GroupFileExpect e = expect_for(g);
   const std::vector<uint8_t> f = encode_group(g, kHash);
   const size_t map0 = sizeof(GroupFileHeader);
-  auto edit_map0 = [&](auto&& change) {
-    std::vector<uint8_t> bad = f;
-    MapRecord r;
-    std::memcpy(&r, bad.data() + map0, sizeof r);
-    change(r);
-    std::memcpy(bad.data() + map0, &r, sizeof r);
-    reseal(bad);
-    return refusal(bad, e);
-  };
+  auto edit_map0 = [&](auto&& change) { return refusal_of_edit(f, map0, e, change); };
   EXPECT_NE(edit_map0([](MapRecord& r) { r.rect_w = 60000; }), "");
   EXPECT_NE(edit_map0([](MapRecord& r) { r.width = 10; }).find("light map"), std::string::npos);
   EXPECT_NE(edit_map0([](MapRecord& r) { r.channels = 2; }), "");
@@ -243,7 +283,7 @@ TEST(GroupFile, CraftedFilesWithAValidChecksumAreRefusedByTheirContent) {
     const size_t part = after_record(bad, map0);
     MapRecord r;
     std::memcpy(&r, bad.data() + part, sizeof r);
-    ASSERT_EQ(r.indirect, 2u);
+    ASSERT_EQ(r.parts, 2u);
     r.light = 0;  // the part names another owner than its map
     std::memcpy(bad.data() + part, &r, sizeof r);
     reseal(bad);

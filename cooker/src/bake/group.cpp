@@ -77,6 +77,11 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
   DirectPass dp = trace_direct(b, lg.light, cand, channels, progress);
   report.stage_time(is_static ? "bake.base" : "bake.contribution", progress.end());
 
+  // Each map's direct part (ShadowMap::direct), kept where the pack may store it apart from the
+  // bounce light: grey for a light (one channel), the static lights' colours for the base map.
+  const bool keep_direct = ind && b.layout.align == 1;
+  auto direct_part = [&](const FloatImage& m) { return is_static ? m : first_channel(m); };
+
   // Bounce light: the group's own, then every object's change to it.
   GroupBounce gb;
   bool bounce = false;
@@ -152,6 +157,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
         decide(DecisionKind::kObjectBounce, DecisionStage::kBounce, lg.bounce_only[q], -1,
                !only[q].empty(), only_reason[q], std::nan(""), std::nan(""),
                seconds[cand.sets.size() + q]);
+      if (keep_direct) out.direct = direct_part(dp.map);
       ind->add(gb.indirect, dp.map, &out.indirect);
     }
     report.stage_time(is_static ? "bake.base_bounce" : "bake.contribution_bounce",
@@ -170,7 +176,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
   // once (all held until decided took the full inn's peak from 2.57 to 2.81 GB); decided and
   // stored in order.
   struct Made {
-    FloatImage map, blocks;
+    FloatImage map, blocks, direct;
     float peak = 0.0f;
     bool solved = false;
   };
@@ -181,9 +187,13 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
     Made& m = made[j];
     if (j < slots) {
       m.map = dp.shadow[j].dense();
-      if (bounce) ind->add(change[j], m.map, &m.blocks);
+      if (bounce) {
+        if (keep_direct) m.direct = direct_part(m.map);
+        ind->add(change[j], m.map, &m.blocks);
+      }
     } else if (!only[j - slots].empty()) {
       m.map = FloatImage(w, h, 3);
+      if (keep_direct) m.direct = FloatImage(w, h, is_static ? 3 : 1);  // bounce light alone
       ind->add(std::move(only[j - slots]), m.map, &m.blocks);
     } else {
       return;
@@ -191,16 +201,19 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
     m.solved = true;
     if (grey) m.map = first_channel(std::move(m.map));
     m.peak = peak_of(m.map, texels);
-    if (planned && !(m.peak > keep_at)) m = Made{FloatImage(), FloatImage(), m.peak, true};
+    if (planned && !(m.peak > keep_at))
+      m = Made{FloatImage(), FloatImage(), FloatImage(), m.peak, true};
   });
   auto keep_map = [&](int object, Made& m, DecisionStage stage, const std::string& what) {
     const bool keep = !planned || m.peak > keep_at;
     decide(kind, stage, object, -1, keep, keep_reason(m.peak, keep_at, what), m.peak, keep_at);
     if (!keep) return false;
     if (is_static)
-      out.static_shadows.push_back({object, std::move(m.map), std::move(m.blocks)});
+      out.static_shadows.push_back(
+          {object, std::move(m.map), std::move(m.blocks), std::move(m.direct)});
     else
-      out.shadows.push_back({light_index, object, std::move(m.map), std::move(m.blocks)});
+      out.shadows.push_back(
+          {light_index, object, std::move(m.map), std::move(m.blocks), std::move(m.direct)});
     return true;
   };
   for (size_t j = 0; j < slots; ++j)
@@ -280,6 +293,7 @@ GroupBake bake_light_group(const BakeContext& b, const BakePlan& plan, size_t gr
       BounceMap p(ab.size());
       for (size_t c = 0; c < p.size(); ++c)
         p[c] = change[size_t(sa)][c] + change[size_t(sb)][c] - ab[c];
+      if (keep_direct) corrections[i].direct = direct_part(corrections[i].map);
       ind->add(std::move(p), corrections[i].map, &corrections[i].indirect);
     });
   }

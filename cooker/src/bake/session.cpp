@@ -172,12 +172,14 @@ BakedMaps BakeSession::assemble(std::vector<GroupBake> groups, Report& report) c
     if (g.group == 0) {
       maps.base = std::move(g.map);
       maps.base_indirect = std::move(g.indirect);
+      maps.base_direct = std::move(g.direct);
       maps.static_shadows = std::move(g.static_shadows);
       continue;
     }
     maps.lights.push_back(plan.groups[g.group].light);
     maps.contribution.push_back(std::move(g.map));
     maps.contribution_indirect.push_back(std::move(g.indirect));
+    maps.contribution_direct.push_back(std::move(g.direct));
     for (ShadowMap& s : g.shadows) maps.shadows.push_back(std::move(s));
     for (PairCorrectionMap& p : g.pair_corrections) maps.pair_corrections.push_back(std::move(p));
   }

@@ -19,7 +19,14 @@ namespace {
 constexpr int kMaxSide = 16384;
 constexpr uint32_t kMaxReason = 64 * 1024;
 enum Role : uint32_t { kOwn = 0, kShadow = 1, kPair = 2, kStaticShadow = 3 };
-enum Part : uint16_t { kNoPart = 0, kHasPart = 1, kIsPart = 2 };  // MapRecord::indirect
+// MapRecord::parts
+enum Part : uint16_t {
+  kNoPart = 0,
+  kHasIndirect = 1,
+  kIsIndirect = 2,
+  kHasDirect = 4,
+  kIsDirect = 8
+};
 
 template <typename T>
 void put(std::vector<uint8_t>& out, const T& v) {
@@ -45,7 +52,7 @@ void zero_free_rect(const FloatImage& m, int& x0, int& y0, int& x1, int& y1) {
   if (x1 <= x0 || y1 <= y0) x0 = y0 = x1 = y1 = 0;
 }
 
-// One image as a record, its mask and its values; `part` is MapRecord::indirect.
+// One image as a record, its mask and its values; `part` is MapRecord::parts.
 void put_image(std::vector<uint8_t>& out, uint32_t role, int light, int object, int object_b,
                const FloatImage& m, uint16_t part) {
   if (m.width <= 0 || m.height <= 0 || m.width > kMaxSide || m.height > kMaxSide ||
@@ -68,7 +75,7 @@ void put_image(std::vector<uint8_t>& out, uint32_t role, int light, int object, 
   r.rect_w = uint16_t(x1 - x0);
   r.rect_h = uint16_t(y1 - y0);
   r.channels = uint16_t(m.channels);
-  r.indirect = part;
+  r.parts = part;
   const size_t c = size_t(m.channels), row = size_t(x1 - x0) * c;
   const size_t n = row * size_t(y1 - y0);
   std::vector<uint8_t> mask((n + 7) / 8, 0);
@@ -90,12 +97,15 @@ void put_image(std::vector<uint8_t>& out, uint32_t role, int light, int object, 
   if (!values.empty()) std::memcpy(out.data() + at, values.data(), values.size() * sizeof(float));
 }
 
-// A map and, when it has one, its indirect part (the block image, BakedMaps) after it.
+// A map and, when it has them, its indirect part (the block image, BakedMaps) and its direct part
+// (ShadowMap::direct) after it.
 void put_map(std::vector<uint8_t>& out, uint32_t role, int light, int object, int object_b,
-             const FloatImage& m, const FloatImage& indirect) {
-  const bool has_part = !indirect.data.empty();
-  put_image(out, role, light, object, object_b, m, has_part ? kHasPart : kNoPart);
-  if (has_part) put_image(out, role, light, object, object_b, indirect, kIsPart);
+             const FloatImage& m, const FloatImage& indirect, const FloatImage& direct) {
+  const bool has_indirect = !indirect.data.empty(), has_direct = !direct.data.empty();
+  put_image(out, role, light, object, object_b, m,
+            uint16_t((has_indirect ? kHasIndirect : 0) | (has_direct ? kHasDirect : 0)));
+  if (has_indirect) put_image(out, role, light, object, object_b, indirect, kIsIndirect);
+  if (has_direct) put_image(out, role, light, object, object_b, direct, kIsDirect);
 }
 
 // A cursor over untrusted bytes: every read is bounds-checked first.
@@ -155,14 +165,14 @@ std::vector<uint8_t> encode_group(const GroupBake& g, const std::array<uint8_t, 
   std::vector<uint8_t> out(sizeof(GroupFileHeader), 0);
   uint32_t maps = 0;
   const bool is_static = g.group == 0;
-  put_map(out, kOwn, -1, -1, -1, g.map, g.indirect);
+  put_map(out, kOwn, -1, -1, -1, g.map, g.indirect, g.direct);
   ++maps;
   for (const ShadowMap& s : g.shadows)
-    put_map(out, kShadow, s.light, s.object, -1, s.map, s.indirect), ++maps;
+    put_map(out, kShadow, s.light, s.object, -1, s.map, s.indirect, s.direct), ++maps;
   for (const PairCorrectionMap& p : g.pair_corrections)
-    put_map(out, kPair, p.light, p.object_a, p.object_b, p.map, p.indirect), ++maps;
+    put_map(out, kPair, p.light, p.object_a, p.object_b, p.map, p.indirect, p.direct), ++maps;
   for (const StaticShadowMap& s : g.static_shadows)
-    put_map(out, kStaticShadow, -1, s.object, -1, s.map, s.indirect), ++maps;
+    put_map(out, kStaticShadow, -1, s.object, -1, s.map, s.indirect, s.direct), ++maps;
   if (is_static && (!g.shadows.empty() || !g.pair_corrections.empty()))
     throw CookError("group file: the static group has light shadows");
   for (const Decision& d : g.decisions) {
@@ -265,7 +275,9 @@ GroupBake decode_group(const uint8_t* data, size_t size, const GroupFileExpect& 
                       std::to_string(r.height) + ", the light map " + std::to_string(e.width) +
                       "x" + std::to_string(e.height));
     // An indirect part only where the layout has blocks.
-    if (!(r.indirect == kNoPart || (r.indirect == kHasPart && e.indirect_width > 0)))
+    if ((r.parts & ~uint16_t(kHasIndirect | kHasDirect)) != 0)
+      throw CookError("group file: " + what + " has bad part flags");
+    if ((r.parts & kHasIndirect) && !(e.indirect_width > 0))
       throw CookError("group file: " + what + " has a bad indirect flag");
     // Roles in order (own map, shadows, pairs, static shadows), each owner once: the map count
     // stays within what the plan allows.
@@ -295,29 +307,40 @@ GroupBake decode_group(const uint8_t* data, size_t size, const GroupFileExpect& 
     }
     if (!ok) throw CookError("group file: " + what + " has a bad role or owner");
     FloatImage m = read_image(r, what);
-    FloatImage part;
-    if (r.indirect == kHasPart) {
+    auto same_owner = [&](const MapRecord& p) {
+      return p.role == r.role && p.light == r.light && p.object == r.object &&
+             p.object_b == r.object_b;
+    };
+    FloatImage part, direct;
+    if (r.parts & kHasIndirect) {
       const MapRecord p = in.take<MapRecord>("map record");
-      if (p.indirect != kIsPart || p.role != r.role || p.light != r.light || p.object != r.object ||
-          p.object_b != r.object_b || p.channels != 3 || p.width != e.indirect_width ||
-          p.height != e.indirect_height)
+      if (p.parts != kIsIndirect || !same_owner(p) || p.channels != 3 ||
+          p.width != e.indirect_width || p.height != e.indirect_height)
         throw CookError("group file: " + what + "'s indirect part does not match it or the layout");
       part = read_image(p, what + "'s indirect part");
+    }
+    if (r.parts & kHasDirect) {
+      const MapRecord p = in.take<MapRecord>("map record");
+      if (p.parts != kIsDirect || !same_owner(p) || p.channels != (is_static ? 3 : 1) ||
+          p.width != r.width || p.height != r.height)
+        throw CookError("group file: " + what + "'s direct part does not match it");
+      direct = read_image(p, what + "'s direct part");
     }
     switch (r.role) {
       case kOwn:
         g.map = std::move(m);
         g.indirect = std::move(part);
+        g.direct = std::move(direct);
         break;
       case kShadow:
-        g.shadows.push_back({r.light, r.object, std::move(m), std::move(part)});
+        g.shadows.push_back({r.light, r.object, std::move(m), std::move(part), std::move(direct)});
         break;
       case kPair:
         g.pair_corrections.push_back(
-            {r.light, r.object, r.object_b, std::move(m), std::move(part)});
+            {r.light, r.object, r.object_b, std::move(m), std::move(part), std::move(direct)});
         break;
       default:
-        g.static_shadows.push_back({r.object, std::move(m), std::move(part)});
+        g.static_shadows.push_back({r.object, std::move(m), std::move(part), std::move(direct)});
         break;
     }
   }

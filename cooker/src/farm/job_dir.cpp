@@ -65,7 +65,7 @@ JobHash hash_of(const std::string& name) {
 // Every option is stored (threads aside): an option added to these structs must be added here and
 // to settings_from_json, or a job would run with its default. (Sizes on 64-bit Linux.)
 static_assert(sizeof(LayoutOptions) == 28, "LayoutOptions changed: update job_dir.cpp");
-static_assert(sizeof(BakeOptions) == 104, "BakeOptions changed: update job_dir.cpp");
+static_assert(sizeof(BakeOptions) == 112, "BakeOptions changed: update job_dir.cpp");
 static_assert(sizeof(ImportLimits) == 48, "ImportLimits changed: update job_dir.cpp");
 
 json settings_json(const CookSettings& s) {
@@ -98,6 +98,7 @@ json settings_json(const CookSettings& s) {
           {"pane_level", b.pane_level},
           {"max_patch_level", b.max_patch_level},
           {"level_tolerance", b.level_tolerance},
+          {"bounce_tolerance", b.bounce_tolerance},
           {"moving_direct", b.moving_direct},
           {"max_triangles", s.import.max_triangles},
           {"max_vertices", s.import.max_vertices},
@@ -168,6 +169,9 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   s.bake.level_tolerance = field<float>(j, "level_tolerance", file);
   if (!(s.bake.level_tolerance <= kMaxLevelTolerance))  // <= 0 (or -0): the default
     throw CookError(file + ": \"level_tolerance\" out of range");
+  s.bake.bounce_tolerance = field<float>(j, "bounce_tolerance", file);
+  if (!(s.bake.bounce_tolerance <= kMaxLevelTolerance))  // <= 0 (or -0): the default
+    throw CookError(file + ": \"bounce_tolerance\" out of range");
   s.bake.moving_direct = field<bool>(j, "moving_direct", file);
   s.import.max_triangles = field<uint64_t>(j, "max_triangles", file);
   s.import.max_vertices = field<uint64_t>(j, "max_vertices", file);

@@ -85,6 +85,10 @@ struct BakeOptions {
   // texel, < 0 = kDefaultMaxPatchLevel; level_tolerance <= 0 = kDefaultLevelTolerance.
   int max_patch_level = -1;
   float level_tolerance = 0.0f;
+  // Texels of bounce light alone take this tolerance instead, and maps may be stored as their
+  // direct and bounce parts (PackOptions::bounce_tolerance); <= 0 = kDefaultBounceTolerance, and
+  // never below level_tolerance.
+  float bounce_tolerance = 0.0f;
   // bake_state: also the moving lights' direct light (for pictures; the runtime's maps hold only
   // their bounce light, the game draws their direct light).
   bool moving_direct = false;
@@ -114,6 +118,7 @@ struct GroupBake {
   size_t group = 0;
   FloatImage map;                                   // B (group 0) or C_l
   FloatImage indirect;                              // its block image (BakedMaps), or empty
+  FloatImage direct;                                // its direct part (ShadowMap), or empty
   std::vector<ShadowMap> shadows;                   // a light group's kept S_ol
   std::vector<PairCorrectionMap> pair_corrections;  // a light group's kept corrections
   std::vector<StaticShadowMap> static_shadows;      // group 0's kept static shadows

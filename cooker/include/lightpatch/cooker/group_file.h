@@ -1,7 +1,7 @@
 // A light group's baked maps as a file (a cook job's result, cook_jobs.h): the one definition of
 // the format, its writer and its checked reader.
 //
-// Format version 2, little-endian, no padding between records:
+// Format version 3, little-endian, no padding between records:
 //   header (64 bytes, GroupFileHeader)
 //   map_count map records, each a MapRecord (40 bytes) followed by
 //     - a bit mask of ceil(n / 8) bytes, n = rect_w * rect_h * channels: bit i (least
@@ -12,9 +12,12 @@
 //     clear, is +0.0. The writer stores the smallest rectangle outside which every value's bits
 //     are zero: a shadow in a corner costs its corner, unlit and unused texels a bit each, and
 //     the maps come back bit for bit.
-//     A map with an indirect part (BakedMaps: its bounce light as a block image, the light map /
-//     Layout::align, 3 channels) has indirect = 1, and the part follows as one more record of
-//     the same owner with indirect = 2, its mask and values (not counted in map_count).
+//     A map's parts follow it as more records of the same owner (not counted in map_count), each
+//     with its mask and values: with bit 0 of `parts` set (1), its indirect part (BakedMaps: its
+//     bounce light as a block image, the light map / Layout::align, 3 channels), a record with
+//     parts = 2; then with bit 2 set (4), its direct part (ShadowMap::direct: the light map's
+//     size, 1 channel, 3 for the static group), a record with parts = 8. Version 2 had no
+//     direct parts.
 //   decision_count decision records, each a DecisionRecord (48 bytes) followed by reason_bytes
 //     bytes of UTF-8 (the reason, no terminator).
 // The header's crc is the CRC-32 (pack_view.h's) of the whole file read with the crc field as
@@ -41,7 +44,7 @@
 namespace lightpatch::cooker {
 
 constexpr char kGroupFileMagic[8] = {'L', 'P', 'G', 'R', 'O', 'U', 'P', '\0'};
-constexpr uint32_t kGroupFileVersion = 2;
+constexpr uint32_t kGroupFileVersion = 3;
 
 struct GroupFileHeader {
   char magic[8];            // kGroupFileMagic
@@ -66,8 +69,9 @@ struct MapRecord {
   uint16_t rect_x, rect_y;  // the stored rectangle
   uint16_t rect_w, rect_h;
   uint16_t channels;  // 1 or 3
-  uint16_t indirect;  // 0 none, 1 the map's indirect part follows, 2 this record is that part
-  uint64_t nonzero;   // values stored after the mask
+  uint16_t
+      parts;  // a map: 0, or 1 (indirect part follows) | 4 (direct part follows); a part: 2 or 8
+  uint64_t nonzero;  // values stored after the mask
 };
 static_assert(sizeof(MapRecord) == 40);
 

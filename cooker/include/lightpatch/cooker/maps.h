@@ -22,11 +22,18 @@ struct FloatImage {
 
 // DESIGN.md, "The method in one screen". Contribution and shadow maps are for colour (1,1,1)
 // and intensity 1; one channel where the light's transport is grey, three where bounce tints it.
+//
+// A map's `direct` part: the map less its bounce light, finalized like it, so that the pack can
+// store the two apart (pack_builder.h, "Direct and bounce parts"). Kept with bounce light on a
+// layout without blocks (Layout::align 1); empty otherwise. One channel for light groups (a white
+// light's direct light is grey), three for the static lights' maps (authored colours); zero for a
+// map that is bounce light alone.
 struct ShadowMap {
   int light = 0;        // index into BakedMaps::lights (semi-dynamic lights)
   int object = 0;       // Scene::objects index
   FloatImage map;       // S_ol = C_l - T_ol (may be negative)
   FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
+  FloatImage direct;    // its direct part (above), or empty
 };
 
 // What object o changes in the static lights' light: B − B_o, B_o being the static lights with o
@@ -35,6 +42,7 @@ struct StaticShadowMap {
   int object = 0;  // Scene::objects index
   FloatImage map;
   FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
+  FloatImage direct;    // its direct part (ShadowMap), or empty
 };
 
 // Light that both objects block from light l, which S_al + S_bl removes twice: added back with
@@ -45,6 +53,7 @@ struct PairCorrectionMap {
   int object_b = 0;
   FloatImage map;
   FloatImage indirect;  // its bounce part's block image (BakedMaps), or empty
+  FloatImage direct;    // its direct part (ShadowMap), or empty
 };
 
 // One pane of the moving lights (pack_format.h, "Moving lights"; docs/moving_lights.md): the
@@ -100,7 +109,10 @@ struct BakedMaps {
   // across creases inside a chart). Empty images where a map has no bounce part or the layout has
   // no blocks.
   FloatImage base_indirect;
-  std::vector<FloatImage> contribution_indirect;    // parallel to contribution
+  std::vector<FloatImage> contribution_indirect;  // parallel to contribution
+  // Each map's direct part (ShadowMap), or empty images.
+  FloatImage base_direct;
+  std::vector<FloatImage> contribution_direct;      // parallel to contribution
   std::vector<ShadowMap> shadows;                   // kept pairs only
   std::vector<PairCorrectionMap> pair_corrections;  // overlapping shadows that matter
   std::vector<StaticShadowMap> static_shadows;      // what objects change in the static light

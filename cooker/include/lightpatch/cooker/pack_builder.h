@@ -23,6 +23,9 @@ enum class EncodingPolicy { kAuto, kLinear, kSquare };
 constexpr int kDefaultMaxPatchLevel = int(pack::kMaxPatchLevel);
 constexpr float kDefaultLevelTolerance = 1.0f;
 constexpr float kMaxLevelTolerance = 16.0f;
+// The same tolerance for texels that hold bounce light alone (PackOptions::bounce_tolerance; the
+// README's "Direct and bounce parts" has the table it was chosen by).
+constexpr float kDefaultBounceTolerance = 4.0f;
 
 struct PackOptions {
   int max_atlas_size = 2048;  // a multiple of pack::kAtlasAlign
@@ -51,6 +54,19 @@ struct PackOptions {
   // In 8-bit output steps of the final map at the authored state (twice the patches' threshold);
   // > 0.
   float level_tolerance = kDefaultLevelTolerance;
+  // Direct and bounce parts. Where a map has a direct part (ShadowMap::direct) and no indirect
+  // part, its texels without direct light (bounce light alone) take this tolerance instead of
+  // level_tolerance, capped at the light the authored image shows at the texel (in output steps:
+  // a blur lifts dark texels, and every map's error adds up there) and never below
+  // level_tolerance; and the map is stored as its direct part's patches plus its bounce part's
+  // (the map less the direct part, significant from a fraction of the map's threshold, within
+  // that tolerance at every texel) where that costs less: atlas bytes, records, kPatchDrawBytes
+  // a patch and kDrawTexelBytes a texel drawn (patch_extract.h). A map whose threshold is a step
+  // of its own peak (a light far dimmer than the authored exposure) keeps level_tolerance. In
+  // output steps like level_tolerance; >= level_tolerance.
+  float bounce_tolerance = kDefaultBounceTolerance;
+  // Store every map that has a direct part as its two parts, whatever it costs (tests).
+  bool always_parts = false;
 };
 
 struct ProbeBake;  // probes.h
