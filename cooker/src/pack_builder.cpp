@@ -55,6 +55,13 @@ struct MapJob {
 // -0.25 % for 4 % more bytes.
 constexpr float kBounceThresholdFraction = 0.5f;
 
+// What a light-map patch costs where the pack builder weighs cuts and parts: its atlas bytes, its
+// record and kPatchDrawBytes for the quad it draws.
+uint64_t patch_bytes(const SourcePatch& p) {
+  return uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
+         sizeof(pack::PatchRecord) + kPatchDrawBytes;
+}
+
 float max3(const glm::vec3& v) {
   return std::max({v.x, v.y, v.z});
 }
@@ -382,23 +389,33 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   for (size_t i = 0; i < maps.lights.size(); ++i)
     light_threshold[i] = significance(maps.contribution[i], half_step / authored[i]);
   const float base_threshold = significance(maps.base, half_step);
-  // The authored image's light at each texel, in output steps (the base map and every light's
-  // contribution at its authored factor, each texel's brightest channel): where it is dim, bounce
-  // light keeps the level tolerance (PackOptions::bounce_tolerance).
-  FloatImage authored_steps;
-  if (maps.output_step > 0.0f && !maps.base.data.empty()) {
-    authored_steps = FloatImage(maps.base.width, maps.base.height, 1);
+  // Bounce light's tolerance at each texel, as a factor on the level tolerance
+  // (PackOptions::bounce_tolerance): at most the light the authored image shows there, in output
+  // steps (the base map and every light's contribution at its authored factor, each texel's
+  // brightest channel), at least the level tolerance. Only where some map has a direct part.
+  bool any_direct = !maps.base_direct.data.empty();
+  for (const FloatImage& d : maps.contribution_direct) any_direct |= !d.data.empty();
+  for (const ShadowMap& m : maps.shadows) any_direct |= !m.direct.data.empty();
+  for (const PairCorrectionMap& m : maps.pair_corrections) any_direct |= !m.direct.data.empty();
+  for (const StaticShadowMap& m : maps.static_shadows) any_direct |= !m.direct.data.empty();
+  FloatImage bounce_scale;
+  if (any_direct) {
+    FloatImage shown(maps.base.width, maps.base.height, 1);
     auto add = [&](const FloatImage& m, float a) {
-      if (m.width != authored_steps.width || m.height != authored_steps.height) return;
+      if (m.width != shown.width || m.height != shown.height || !(maps.output_step > 0.0f)) return;
       const size_t ch = size_t(m.channels);
-      for (size_t t = 0; t < authored_steps.data.size(); ++t) {
+      for (size_t t = 0; t < shown.data.size(); ++t) {
         float v = 0.0f;
         for (size_t c = 0; c < ch; ++c) v = std::max(v, m.data[t * ch + c]);
-        authored_steps.data[t] += a * v / maps.output_step;
+        shown.data[t] += a * v / maps.output_step;
       }
     };
     add(maps.base, 1.0f);
     for (size_t i = 0; i < maps.lights.size(); ++i) add(maps.contribution[i], authored[i]);
+    for (float& v : shown.data)
+      v = std::clamp(v, options.level_tolerance, options.bounce_tolerance) /
+          options.level_tolerance;
+    bounce_scale = std::move(shown);
   }
   std::vector<uint8_t> light_own_peak(maps.lights.size());
   for (size_t i = 0; i < maps.lights.size(); ++i)
@@ -592,14 +609,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<PartsDecision> parts(jobs.size());
   parallel_for(int(jobs.size()), threads, [&](int i) {
     const MapJob& j = jobs[size_t(i)];
-    // How a map is cut: its significance threshold (map units), its level tolerance in output
-    // steps (relative to the job's threshold, half a step) and each texel's factor on it, if any.
+    // How a map is cut: its significance threshold (map units) and each texel's factor on the
+    // level tolerance, if any.
     struct CutRule {
       float threshold;
-      float steps;
       const FloatImage* scale = nullptr;
     };
-    const CutRule whole{j.threshold, options.level_tolerance};
+    const CutRule whole{j.threshold};
     // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
     // so a patch keeps three channels only where the tint shows above the 8-bit step (B is
     // always 3: authored colours).
@@ -626,11 +642,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       // of a tile with one shadow edge still shrinks. Level 0 first within a job, so that the
       // runtime's runs of one program stay long.
       if (target == kTargetLightMap && options.max_patch_level > 0) {
-        const float tolerance = 2.0f * rule.steps * j.threshold;  // threshold = half a step
-        auto bytes = [](const SourcePatch& p) {
-          return uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
-                 sizeof(pack::PatchRecord) + kPatchDrawBytes;
-        };
+        // The job's threshold is half an output step.
+        const float tolerance = 2.0f * options.level_tolerance * j.threshold;
         // Stores p at the coarsest level its error allows; returns that level.
         auto store_coarsest = [&](SourcePatch& p) {
           SourcePatch reduced;
@@ -655,11 +668,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
               else
                 finer.push_back(std::move(t));
               for (SourcePatch& f : finer) {
-                split_bytes += bytes(f);
+                split_bytes += patch_bytes(f);
                 tiles.push_back(std::move(f));
               }
             }
-            if (!tiles.empty() && split_bytes < bytes(p)) return tiles;
+            if (!tiles.empty() && split_bytes < patch_bytes(p)) return tiles;
           }
           one.push_back(std::move(p));
           return one;
@@ -678,7 +691,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
             for (SourcePatch& c : split_by_charts(whole, regions, inset)) {
               store_coarsest(c);
               for (SourcePatch& t : tiled(std::move(c), kLevelTile)) {
-                *total += bytes(t);
+                *total += patch_bytes(t);
                 pieces.push_back(std::move(t));
               }
             }
@@ -688,7 +701,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           std::vector<SourcePatch> pieces = chart_pieces(0, &pieces_bytes);
           std::vector<SourcePatch> tiles = tiled(p, kLevelTile);
           uint64_t tiles_bytes = 0;
-          for (const SourcePatch& t : tiles) tiles_bytes += bytes(t);
+          for (const SourcePatch& t : tiles) tiles_bytes += patch_bytes(t);
           if (!pieces.empty() && pieces_bytes < tiles_bytes) {
             // Chosen on whole chart rectangles; stored without the border's outer rings, which
             // no mesh reads (choosing on the inset pieces cut 2.5x as many patches on the full
@@ -725,20 +738,20 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         const FloatImage& m = *j.map;
         const size_t n = size_t(m.width) * size_t(m.height);
         const size_t mc = size_t(m.channels), dc = size_t(direct->channels);
-        // Each texel's tolerance in output steps: bounce light's, but at most the light the
-        // authored image shows there (a blur lifts dark corners: every map's error adds up there)
-        // and at least the level tolerance; the level tolerance where the direct part shows
-        // (above the level at which cut pieces keep dim light).
-        const float bounce_steps = j.own_peak ? options.level_tolerance : options.bounce_tolerance;
-        const float dim = kCutKeepFraction * j.threshold;
-        FloatImage whole_scale(m.width, m.height, 1), bounce_scale(m.width, m.height, 1);
-        for (size_t t = 0; t < n; ++t) {
-          float d = 0.0f;
-          for (size_t c = 0; c < dc; ++c) d = std::max(d, std::fabs(direct->data[t * dc + c]));
-          const float shown = authored_steps.data.empty() ? 0.0f : authored_steps.data[t];
-          const float steps = std::clamp(shown, options.level_tolerance, bounce_steps);
-          whole_scale.data[t] = d > dim ? 1.0f : steps / options.level_tolerance;
-          bounce_scale.data[t] = steps / options.level_tolerance;
+        // Bounce light's tolerance (bounce_scale, capped at what the authored image shows: a
+        // blur lifts dark corners, where every map's error adds up), on the whole map only where
+        // the direct part stays under the level at which cut pieces keep dim light; none for a
+        // map whose threshold is its own peak's.
+        const FloatImage* loose = j.own_peak ? nullptr : &bounce_scale;
+        FloatImage whole_scale;
+        if (loose) {
+          whole_scale = FloatImage(m.width, m.height, 1);
+          const float dim = kCutKeepFraction * j.threshold;
+          for (size_t t = 0; t < n; ++t) {
+            float d = 0.0f;
+            for (size_t c = 0; c < dc; ++c) d = std::max(d, std::fabs(direct->data[t * dc + c]));
+            whole_scale.data[t] = d > dim ? 1.0f : loose->data[t];
+          }
         }
         // The bounce part: the map less the direct part (a grey part in every channel).
         FloatImage bounce = m;
@@ -748,19 +761,17 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         std::vector<SourcePatch> split_into;
         ColourDecision split_colours;
         cut(m, layout.regions, kTargetLightMap, plain, colour[size_t(i)],
-            CutRule{j.threshold, options.level_tolerance, &whole_scale});
+            CutRule{j.threshold, loose ? &whole_scale : nullptr});
         cut(*direct, layout.regions, kTargetLightMap, split_into, split_colours, whole);
         // Significant from a fraction of the threshold: each part alone drops its dim tail,
         // which the whole map carried beside the other part's light.
         cut(bounce, layout.regions, kTargetLightMap, split_into, split_colours,
-            CutRule{kBounceThresholdFraction * j.threshold, options.level_tolerance,
-                    &bounce_scale});
+            CutRule{kBounceThresholdFraction * j.threshold, loose});
         PartsDecision& pd = parts[size_t(i)];
         pd.considered = true;
         auto weigh = [](const std::vector<SourcePatch>& v, uint64_t* bytes, uint64_t* texels) {
           for (const SourcePatch& p : v) {
-            *bytes += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels) +
-                      sizeof(pack::PatchRecord) + kPatchDrawBytes;
+            *bytes += patch_bytes(p);
             *texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
           }
         };

@@ -377,18 +377,17 @@ void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
   // images need none (block_image() fills their rings).
   // Direct parts too (ShadowMap::direct): finalizing is linear, so the bounce part the pack
   // takes as the difference is the finalized map's.
-  std::vector<FloatImage*> all{&maps.base};
+  std::vector<FloatImage*> all;
+  auto add = [&](FloatImage& m) {
+    if (!m.data.empty()) all.push_back(&m);
+  };
+  all.push_back(&maps.base);
+  add(maps.base_direct);
   for (FloatImage& c : maps.contribution) all.push_back(&c);
-  for (ShadowMap& s : maps.shadows) all.push_back(&s.map);
-  for (PairCorrectionMap& p : maps.pair_corrections) all.push_back(&p.map);
-  for (StaticShadowMap& s : maps.static_shadows) all.push_back(&s.map);
-  std::vector<FloatImage*> direct{&maps.base_direct};
-  for (FloatImage& c : maps.contribution_direct) direct.push_back(&c);
-  for (ShadowMap& s : maps.shadows) direct.push_back(&s.direct);
-  for (PairCorrectionMap& p : maps.pair_corrections) direct.push_back(&p.direct);
-  for (StaticShadowMap& s : maps.static_shadows) direct.push_back(&s.direct);
-  for (FloatImage* d : direct)
-    if (!d->data.empty()) all.push_back(d);
+  for (FloatImage& c : maps.contribution_direct) add(c);
+  for (ShadowMap& s : maps.shadows) all.push_back(&s.map), add(s.direct);
+  for (PairCorrectionMap& p : maps.pair_corrections) all.push_back(&p.map), add(p.direct);
+  for (StaticShadowMap& s : maps.static_shadows) all.push_back(&s.map), add(s.direct);
   for (PaneMap& p : maps.panes)
     if (!p.map.data.empty()) all.push_back(&p.map);  // else its block image alone (PaneMap)
   // Each map alone: both cores.
