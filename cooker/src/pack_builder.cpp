@@ -1151,8 +1151,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
          "moving lights' panes are stored at 1/2^pane_level of the indirect map's resolution; "
          "each light-map patch at the coarsest level up to max_patch_level whose magnification "
          "stays within level_tolerance_steps 8-bit output steps of the patch at every texel and "
-         "channel; a level stores the means of 2^level x 2^level texel blocks, magnified "
-         "bilinearly inside the patch by the runtime"}};
+         "channel; a light-map patch's level stores values fitted (least squares, each texel "
+         "weighted by its tolerance) so that their bilinear magnification inside the patch, by "
+         "the runtime, matches its texels; a pane's level stores the means of 2^level x 2^level "
+         "texel blocks"}};
     {
       nlohmann::json per = nlohmann::json::array();
       int considered = 0, chosen = 0;

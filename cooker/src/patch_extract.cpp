@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/pack_format.h"
@@ -130,6 +131,90 @@ void reduce_patch(SourcePatch& patch, int level) {
   patch.tolerance_scale.clear();  // checked at level 0 only
 }
 
+void fit_patch(const SourcePatch& full, SourcePatch& reduced) {
+  if (full.level != 0 || reduced.level < 1 || reduced.dest.w != full.dest.w ||
+      reduced.dest.h != full.dest.h || reduced.channels != full.channels ||
+      full.values.size() != size_t(full.dest.w) * full.dest.h * size_t(full.channels) ||
+      reduced.values.size() !=
+          size_t(reduced.stored_w()) * reduced.stored_h() * size_t(reduced.channels))
+    throw CookError("fit_patch: not a level-0 patch and its reduction");
+  const int w = full.dest.w, h = full.dest.h, level = reduced.level;
+  const int sw = reduced.stored_w(), sh = reduced.stored_h();
+  const size_t ch = size_t(full.channels), n = size_t(w) * h, m = size_t(sw) * sh;
+  std::vector<MagnifyTap<float>> tx, ty;
+  for (int x = 0; x < w; ++x)
+    tx.push_back(magnify_tap<float>(uint32_t(x), uint32_t(sw), uint32_t(level)));
+  for (int y = 0; y < h; ++y)
+    ty.push_back(magnify_tap<float>(uint32_t(y), uint32_t(sh), uint32_t(level)));
+  // Each texel's error counts as a share of its own tolerance: weight 1 / scale^2.
+  std::vector<float> weight(n, 1.0f);
+  if (full.tolerance_scale.size() == n) {
+    for (size_t t = 0; t < n; ++t) {
+      const float sc = full.tolerance_scale[t];
+      if (sc > 0.0f && std::isfinite(sc)) weight[t] = 1.0f / (sc * sc);
+    }
+  }
+  // out = M c (the runtime's magnification) and out = M^T r (its transpose).
+  auto magnify = [&](const std::vector<float>& c, std::vector<float>& out) {
+    for (int y = 0; y < h; ++y) {
+      const MagnifyTap<float>& b = ty[size_t(y)];
+      for (int x = 0; x < w; ++x) {
+        const MagnifyTap<float>& a = tx[size_t(x)];
+        out[size_t(y) * w + x] =
+            magnify_blend(c[size_t(b.i0) * sw + a.i0], c[size_t(b.i0) * sw + a.i1],
+                          c[size_t(b.i1) * sw + a.i0], c[size_t(b.i1) * sw + a.i1], a.t, b.t);
+      }
+    }
+  };
+  auto spread = [&](const std::vector<float>& r, std::vector<float>& out) {
+    std::fill(out.begin(), out.end(), 0.0f);
+    for (int y = 0; y < h; ++y) {
+      const MagnifyTap<float>& b = ty[size_t(y)];
+      for (int x = 0; x < w; ++x) {
+        const MagnifyTap<float>& a = tx[size_t(x)];
+        const float v = r[size_t(y) * w + x];
+        out[size_t(b.i0) * sw + a.i0] += (1.0f - a.t) * (1.0f - b.t) * v;
+        out[size_t(b.i0) * sw + a.i1] += a.t * (1.0f - b.t) * v;
+        out[size_t(b.i1) * sw + a.i0] += (1.0f - a.t) * b.t * v;
+        out[size_t(b.i1) * sw + a.i1] += a.t * b.t * v;
+      }
+    }
+  };
+  auto dot = [](const std::vector<float>& u) {
+    double d = 0.0;
+    for (float v : u) d += double(v) * v;
+    return d;
+  };
+  // Conjugate gradients on the normal equations (CGLS), per channel, from the block means.
+  std::vector<float> c(m), r(n), s(m), p(m), q(n);
+  for (size_t k = 0; k < ch; ++k) {
+    for (size_t i = 0; i < m; ++i) c[i] = reduced.values[i * ch + k];
+    magnify(c, q);
+    for (size_t t = 0; t < n; ++t) r[t] = weight[t] * (full.values[t * ch + k] - q[t]);
+    spread(r, s);
+    p = s;
+    double gamma = dot(s);
+    for (int it = 0; it < kFitIterations && gamma > 0.0; ++it) {
+      magnify(p, q);
+      double qq = 0.0;
+      for (size_t t = 0; t < n; ++t) qq += double(weight[t]) * q[t] * q[t];
+      if (!(qq > 0.0)) break;
+      const float alpha = float(gamma / qq);
+      for (size_t i = 0; i < m; ++i) c[i] += alpha * p[i];
+      for (size_t t = 0; t < n; ++t) r[t] -= alpha * weight[t] * q[t];
+      spread(r, s);
+      const double next = dot(s);
+      const float beta = float(next / gamma);
+      gamma = next;
+      for (size_t i = 0; i < m; ++i) p[i] = s[i] + beta * p[i];
+    }
+    // Magnitudes: never negative (the sign is the patch's); a non-finite step keeps the mean.
+    for (size_t i = 0; i < m; ++i) {
+      if (std::isfinite(c[i])) reduced.values[i * ch + k] = std::max(c[i], 0.0f);
+    }
+  }
+}
+
 int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
                    SourcePatch* coarsest) {
   if (patch.level != 0) throw CookError("coarsest_level: a magnified patch");
@@ -140,6 +225,7 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
     if ((w >> (level - 1)) < 2 && (h >> (level - 1)) < 2) break;
     SourcePatch reduced = patch;
     reduce_patch(reduced, level);
+    fit_patch(patch, reduced);
     const int sw = reduced.stored_w(), sh = reduced.stored_h();
     const float* v = reduced.values.data();
     bool within = true;

@@ -59,14 +59,23 @@ void extract_patches(const FloatImage& map, const std::vector<Region>& regions, 
 // patch where coarsest_level() says its magnification stays within a tolerance).
 void reduce_patch(SourcePatch& patch, int level);
 
+// Refits the stored values of `reduced` (reduce_patch() of `full`, same rectangle and channels)
+// so that their magnification matches `full` in the least-squares sense, each texel's error
+// weighted by the inverse square of its tolerance_scale (1 where `full` has none): kFitIterations
+// conjugate-gradient steps from the block means, each stored value kept >= 0. Block means smooth
+// twice (the box, then the magnification's tent): they lift the dim side of every curve, and at a
+// patch's clamped edge miss a ramp by (2^level - 1) / 2 slopes. Throws CookError on a mismatch.
+constexpr int kFitIterations = 4;
+void fit_patch(const SourcePatch& full, SourcePatch& reduced);
+
 // The coarsest level in [1, max_level] (at most pack::kMaxPatchLevel) at which `patch` (level 0),
-// stored as reduce_patch() stores it and magnified by the runtime's rule (patch_accumulate.h,
-// magnify_tap), stays within `tolerance` (this map's units; times the texel's tolerance_scale
-// where the patch has one) of its own values at every texel and channel of its rectangle; levels
-// are tried from 1 up and the first that fails ends the search. 0 when level 1 fails (or max_level
-// < 1). Quantization is not included: the 8-bit codes add their own half step either way. With
-// `coarsest` and a level > 0, *coarsest is the patch stored at that level (what reduce_patch()
-// makes of it), so a caller keeps what was checked.
+// stored as reduce_patch() then fit_patch() store it and magnified by the runtime's rule
+// (patch_accumulate.h, magnify_tap), stays within `tolerance` (this map's units; times the texel's
+// tolerance_scale where the patch has one) of its own values at every texel and channel of its
+// rectangle; levels are tried from 1 up and the first that fails ends the search. 0 when level 1
+// fails (or max_level < 1). Quantization is not included: the 8-bit codes add their own half step
+// either way. With `coarsest` and a level > 0, *coarsest is the patch stored at that level (what
+// reduce_patch() and fit_patch() make of it), so a caller keeps what was checked.
 int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
                    SourcePatch* coarsest = nullptr);
 

@@ -25,7 +25,7 @@ constexpr float kDefaultLevelTolerance = 1.0f;
 constexpr float kMaxLevelTolerance = 16.0f;
 // The same tolerance for texels that hold bounce light alone (PackOptions::bounce_tolerance; the
 // README's "Direct and bounce parts" has the table it was chosen by).
-constexpr float kDefaultBounceTolerance = 4.0f;
+constexpr float kDefaultBounceTolerance = 3.0f;
 
 struct PackOptions {
   int max_atlas_size = 2048;  // a multiple of pack::kAtlasAlign
