@@ -132,93 +132,171 @@ void reduce_patch(SourcePatch& patch, int level) {
 }
 
 void fit_patch(const SourcePatch& full, SourcePatch& reduced) {
-  if (full.level != 0 || reduced.level < 1 || reduced.dest.w != full.dest.w ||
-      reduced.dest.h != full.dest.h || reduced.channels != full.channels ||
+  if (full.level != 0 || reduced.level < 1 || full.channels < 1 || full.channels > 3 ||
+      reduced.dest.w != full.dest.w || reduced.dest.h != full.dest.h ||
+      reduced.channels != full.channels ||
       full.values.size() != size_t(full.dest.w) * full.dest.h * size_t(full.channels) ||
       reduced.values.size() !=
           size_t(reduced.stored_w()) * reduced.stored_h() * size_t(reduced.channels))
     throw CookError("fit_patch: not a level-0 patch and its reduction");
   const int w = full.dest.w, h = full.dest.h, level = reduced.level;
   const int sw = reduced.stored_w(), sh = reduced.stored_h();
-  const size_t ch = size_t(full.channels), n = size_t(w) * h, m = size_t(sw) * sh;
-  std::vector<MagnifyTap<float>> tx, ty;
+  const size_t ch = size_t(full.channels), n = size_t(w) * h * ch, m = size_t(sw) * sh * ch;
+  const size_t row = size_t(w) * ch;  // a destination row, all channels interleaved
+  // Scratch reused across calls on a thread: the pack builder fits many small tiles.
+  thread_local std::vector<MagnifyTap<float>> tx, ty;
+  thread_local std::vector<float> weight, c, r, s, p, q, half;
+  tx.resize(size_t(w));
+  ty.resize(size_t(h));
   for (int x = 0; x < w; ++x)
-    tx.push_back(magnify_tap<float>(uint32_t(x), uint32_t(sw), uint32_t(level)));
+    tx[size_t(x)] = magnify_tap<float>(uint32_t(x), uint32_t(sw), uint32_t(level));
   for (int y = 0; y < h; ++y)
-    ty.push_back(magnify_tap<float>(uint32_t(y), uint32_t(sh), uint32_t(level)));
+    ty[size_t(y)] = magnify_tap<float>(uint32_t(y), uint32_t(sh), uint32_t(level));
   // Each texel's error counts as a share of its own tolerance: weight 1 / scale^2.
-  std::vector<float> weight(n, 1.0f);
-  if (full.tolerance_scale.size() == n) {
-    for (size_t t = 0; t < n; ++t) {
+  weight.assign(n, 1.0f);
+  if (full.tolerance_scale.size() == size_t(w) * h) {
+    for (size_t t = 0; t < size_t(w) * h; ++t) {
       const float sc = full.tolerance_scale[t];
-      if (sc > 0.0f && std::isfinite(sc)) weight[t] = 1.0f / (sc * sc);
+      if (sc > 0.0f && std::isfinite(sc))
+        for (size_t k = 0; k < ch; ++k) weight[t * ch + k] = 1.0f / (sc * sc);
     }
   }
-  // out = M c (the runtime's magnification) and out = M^T r (its transpose).
-  auto magnify = [&](const std::vector<float>& c, std::vector<float>& out) {
-    for (int y = 0; y < h; ++y) {
-      const MagnifyTap<float>& b = ty[size_t(y)];
+  // out = M v, the runtime's magnification: along x on the stored rows, then along y (the order
+  // of magnify_blend, so the same floats), every channel at once.
+  auto magnify = [&](const std::vector<float>& v, std::vector<float>& out) {
+    half.resize(size_t(sh) * row);
+    for (int j = 0; j < sh; ++j) {
+      const float* in = &v[size_t(j) * sw * ch];
+      float* o = &half[size_t(j) * row];
       for (int x = 0; x < w; ++x) {
         const MagnifyTap<float>& a = tx[size_t(x)];
-        out[size_t(y) * w + x] =
-            magnify_blend(c[size_t(b.i0) * sw + a.i0], c[size_t(b.i0) * sw + a.i1],
-                          c[size_t(b.i1) * sw + a.i0], c[size_t(b.i1) * sw + a.i1], a.t, b.t);
+        for (size_t k = 0; k < ch; ++k) {
+          const float l = in[a.i0 * ch + k], rt = in[a.i1 * ch + k];
+          o[size_t(x) * ch + k] = l + a.t * (rt - l);
+        }
       }
     }
+    for (int y = 0; y < h; ++y) {
+      const MagnifyTap<float>& b = ty[size_t(y)];
+      const float* top = &half[b.i0 * row];
+      const float* bottom = &half[b.i1 * row];
+      float* o = &out[size_t(y) * row];
+      for (size_t i = 0; i < row; ++i) o[i] = top[i] + b.t * (bottom[i] - top[i]);
+    }
   };
-  auto spread = [&](const std::vector<float>& r, std::vector<float>& out) {
+  // out = M^T v: the same passes transposed, y first.
+  auto spread = [&](const std::vector<float>& v, std::vector<float>& out) {
+    half.assign(size_t(sh) * row, 0.0f);
+    for (int y = 0; y < h; ++y) {
+      const MagnifyTap<float>& b = ty[size_t(y)];
+      const float* in = &v[size_t(y) * row];
+      float* top = &half[b.i0 * row];
+      float* bottom = &half[b.i1 * row];
+      for (size_t i = 0; i < row; ++i) {
+        top[i] += (1.0f - b.t) * in[i];
+        bottom[i] += b.t * in[i];
+      }
+    }
     std::fill(out.begin(), out.end(), 0.0f);
-    for (int y = 0; y < h; ++y) {
-      const MagnifyTap<float>& b = ty[size_t(y)];
+    for (int j = 0; j < sh; ++j) {
+      const float* in = &half[size_t(j) * row];
+      float* o = &out[size_t(j) * sw * ch];
       for (int x = 0; x < w; ++x) {
         const MagnifyTap<float>& a = tx[size_t(x)];
-        const float v = r[size_t(y) * w + x];
-        out[size_t(b.i0) * sw + a.i0] += (1.0f - a.t) * (1.0f - b.t) * v;
-        out[size_t(b.i0) * sw + a.i1] += a.t * (1.0f - b.t) * v;
-        out[size_t(b.i1) * sw + a.i0] += (1.0f - a.t) * b.t * v;
-        out[size_t(b.i1) * sw + a.i1] += a.t * b.t * v;
+        for (size_t k = 0; k < ch; ++k) {
+          const float u = in[size_t(x) * ch + k];
+          o[a.i0 * ch + k] += (1.0f - a.t) * u;
+          o[a.i1 * ch + k] += a.t * u;
+        }
       }
     }
   };
-  auto dot = [](const std::vector<float>& u) {
-    double d = 0.0;
-    for (float v : u) d += double(v) * v;
-    return d;
-  };
-  // Conjugate gradients on the normal equations (CGLS), per channel, from the block means.
-  std::vector<float> c(m), r(n), s(m), p(m), q(n);
-  for (size_t k = 0; k < ch; ++k) {
-    for (size_t i = 0; i < m; ++i) c[i] = reduced.values[i * ch + k];
-    magnify(c, q);
-    for (size_t t = 0; t < n; ++t) r[t] = weight[t] * (full.values[t * ch + k] - q[t]);
-    spread(r, s);
-    p = s;
-    double gamma = dot(s);
-    for (int it = 0; it < kFitIterations && gamma > 0.0; ++it) {
-      magnify(p, q);
-      double qq = 0.0;
-      for (size_t t = 0; t < n; ++t) qq += double(weight[t]) * q[t] * q[t];
-      if (!(qq > 0.0)) break;
-      const float alpha = float(gamma / qq);
-      for (size_t i = 0; i < m; ++i) c[i] += alpha * p[i];
-      for (size_t t = 0; t < n; ++t) r[t] -= alpha * weight[t] * q[t];
-      spread(r, s);
-      const double next = dot(s);
-      const float beta = float(next / gamma);
-      gamma = next;
-      for (size_t i = 0; i < m; ++i) p[i] = s[i] + beta * p[i];
+  // Per channel: sum of v[i] * u[i] * (weight[i] if given).
+  auto dots = [&](const std::vector<float>& v, const std::vector<float>& u, const float* wt,
+                  double* out) {
+    for (size_t k = 0; k < ch; ++k) {
+      double sum = 0.0;
+      if (wt) {
+        for (size_t i = k; i < v.size(); i += ch) sum += double(v[i]) * u[i] * wt[i];
+      } else {
+        for (size_t i = k; i < v.size(); i += ch) sum += double(v[i]) * u[i];
+      }
+      out[k] = sum;
     }
-    // Magnitudes: never negative (the sign is the patch's); a non-finite step keeps the mean.
-    for (size_t i = 0; i < m; ++i) {
-      if (std::isfinite(c[i])) reduced.values[i * ch + k] = std::max(c[i], 0.0f);
+  };
+  // Conjugate gradients on the normal equations (CGLS), each channel its own, from the block
+  // means.
+  c = reduced.values;
+  r.resize(n);
+  q.resize(n);
+  s.resize(m);
+  magnify(c, q);
+  for (size_t i = 0; i < n; ++i) r[i] = weight[i] * (full.values[i] - q[i]);
+  spread(r, s);
+  p = s;
+  double gamma[3], next[3], qq[3];
+  float alpha[3], beta[3];
+  dots(s, s, nullptr, gamma);
+  for (int it = 0; it < kFitIterations; ++it) {
+    magnify(p, q);
+    dots(q, q, weight.data(), qq);
+    bool any = false;
+    for (size_t k = 0; k < ch; ++k) {
+      const bool step = gamma[k] > 0.0 && qq[k] > 0.0;
+      alpha[k] = step ? float(gamma[k] / qq[k]) : 0.0f;
+      any = any || step;
+    }
+    if (!any) break;
+    for (size_t k = 0; k < ch; ++k) {
+      for (size_t i = k; i < m; i += ch) c[i] += alpha[k] * p[i];
+      for (size_t i = k; i < n; i += ch) r[i] -= alpha[k] * weight[i] * q[i];
+    }
+    spread(r, s);
+    dots(s, s, nullptr, next);
+    for (size_t k = 0; k < ch; ++k) {
+      beta[k] = gamma[k] > 0.0 ? float(next[k] / gamma[k]) : 0.0f;
+      gamma[k] = next[k];
+    }
+    for (size_t k = 0; k < ch; ++k)
+      for (size_t i = k; i < m; i += ch) p[i] = s[i] + beta[k] * p[i];
+  }
+  // Magnitudes: never negative (the sign is the patch's); a non-finite step keeps the mean.
+  for (size_t i = 0; i < m; ++i)
+    if (std::isfinite(c[i])) reduced.values[i] = std::max(c[i], 0.0f);
+}
+
+namespace {
+
+// Whether the magnification of `reduced` stays within `tolerance` (times the texel's scale where
+// `full` has them) of `full` at every texel and channel (false on a non-finite value).
+bool within_tolerance(const SourcePatch& full, const SourcePatch& reduced, float tolerance) {
+  const int w = full.dest.w, h = full.dest.h, ch = full.channels, level = reduced.level;
+  const int sw = reduced.stored_w(), sh = reduced.stored_h();
+  const float* v = reduced.values.data();
+  for (int y = 0; y < h; ++y) {
+    const MagnifyTap<float> ty = magnify_tap<float>(uint32_t(y), uint32_t(sh), uint32_t(level));
+    for (int x = 0; x < w; ++x) {
+      const MagnifyTap<float> tx = magnify_tap<float>(uint32_t(x), uint32_t(sw), uint32_t(level));
+      const size_t a = (size_t(ty.i0) * sw + tx.i0) * ch, b = (size_t(ty.i0) * sw + tx.i1) * ch;
+      const size_t c = (size_t(ty.i1) * sw + tx.i0) * ch, d = (size_t(ty.i1) * sw + tx.i1) * ch;
+      const float at = full.tolerance_scale.empty()
+                           ? tolerance
+                           : tolerance * full.tolerance_scale[size_t(y) * w + x];
+      for (int k = 0; k < ch; ++k) {
+        const float m = magnify_blend(v[a + k], v[b + k], v[c + k], v[d + k], tx.t, ty.t);
+        if (!(std::fabs(m - full.values[(size_t(y) * w + x) * ch + k]) <= at)) return false;
+      }
     }
   }
+  return true;
 }
+
+}  // namespace
 
 int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
                    SourcePatch* coarsest) {
   if (patch.level != 0) throw CookError("coarsest_level: a magnified patch");
-  const int w = patch.dest.w, h = patch.dest.h, ch = patch.channels;
+  const int w = patch.dest.w, h = patch.dest.h;
   int chosen = 0;
   for (int level = 1; level <= std::min(max_level, int(pack::kMaxPatchLevel)); ++level) {
     // A patch one texel wide along an axis gains nothing there; one that is 1 x 1 nothing at all.
@@ -226,28 +304,7 @@ int coarsest_level(const SourcePatch& patch, int max_level, float tolerance,
     SourcePatch reduced = patch;
     reduce_patch(reduced, level);
     fit_patch(patch, reduced);
-    const int sw = reduced.stored_w(), sh = reduced.stored_h();
-    const float* v = reduced.values.data();
-    bool within = true;
-    for (int y = 0; y < h && within; ++y) {
-      const MagnifyTap<float> ty = magnify_tap<float>(uint32_t(y), uint32_t(sh), uint32_t(level));
-      for (int x = 0; x < w && within; ++x) {
-        const MagnifyTap<float> tx = magnify_tap<float>(uint32_t(x), uint32_t(sw), uint32_t(level));
-        const size_t a = (size_t(ty.i0) * sw + tx.i0) * ch, b = (size_t(ty.i0) * sw + tx.i1) * ch;
-        const size_t c = (size_t(ty.i1) * sw + tx.i0) * ch, d = (size_t(ty.i1) * sw + tx.i1) * ch;
-        for (int k = 0; k < ch; ++k) {
-          const float m = magnify_blend(v[a + k], v[b + k], v[c + k], v[d + k], tx.t, ty.t);
-          const float at = patch.tolerance_scale.empty()
-                               ? tolerance
-                               : tolerance * patch.tolerance_scale[size_t(y) * w + x];
-          if (!(std::fabs(m - patch.values[(size_t(y) * w + x) * ch + k]) <= at)) {
-            within = false;
-            break;
-          }
-        }
-      }
-    }
-    if (!within) break;
+    if (!within_tolerance(patch, reduced, tolerance)) break;
     chosen = level;
     if (coarsest) *coarsest = std::move(reduced);
   }
