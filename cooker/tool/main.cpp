@@ -79,7 +79,7 @@ constexpr const char* kCookOptionsHelp =
     "                         0.01-16 (default 1: about the 8-bit rounding's own error)\n"
     "  --bounce-tolerance S   the same for texels of bounce light alone, at most the steps\n"
     "                         the authored image shows there, 0.01-16, at least\n"
-    "                         --level-tolerance (default 4); each map is also stored as its\n"
+    "                         --level-tolerance (default 3); each map is also stored as its\n"
     "                         direct part and its bounce part within it, where that costs\n"
     "                         less (README, \"Direct and bounce parts\")\n"
     "  --output-step E        irradiance of one 8-bit step at the authored exposure (default:\n"
