@@ -50,7 +50,8 @@ void add_decoded(const SourcePatch& patch, const QuantizedPatch& q, FloatImage& 
       for (int c = 0; c < map.channels; ++c) {
         const int pc = patch.channels == 1 ? 0 : c;
         const uint8_t code = q.codes[(size_t(y) * r.w + x) * size_t(patch.channels) + size_t(pc)];
-        map.at(r.x + x, r.y + y, c) += sign * q.scale * patch_decode_unit(code, q.encoding);
+        map.at(r.x + x, r.y + y, c) +=
+            sign * q.scale * patch_decode_unit(code, q.encoding) * (float(patch.tint[c]) / 255.0f);
       }
 }
 

@@ -589,6 +589,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<std::vector<QuantizedPatch>> per_job_q(jobs.size());  // indirect patches, quantized
   struct ColourDecision {
     int three = 0, one = 0;  // 3-channel patches kept, collapsed to 1
+    int tinted = 0;          // final pieces collapsed to 1 channel with a tint
     float max_spread = 0.0f;
   };
   std::vector<ColourDecision> colour(jobs.size());
@@ -716,6 +717,12 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         std::stable_sort(
             out.begin() + std::ptrdiff_t(first), out.end(),
             [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
+      }
+      // The pieces still in colour whose light has one colour (one light on one albedo): one
+      // channel and a tint, within a quarter of an output step (collapse_untinted's bound).
+      if (!options.keep_colour && options.tint_pieces) {
+        for (size_t k = first; k < out.size(); ++k)
+          if (out[k].channels == 3 && collapse_to_tint(out[k], 0.5f * j.threshold)) ++d.tinted;
       }
     };
     auto cost = [](const std::vector<SourcePatch>& v) {
@@ -1000,6 +1007,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                       (destination >= 0 ? (destination + 1) << kFlagDestinationShift : 0) |
                       (uint32_t(p.level) << kFlagLevelShift));
     r.target = p.target;
+    for (int ch = 0; ch < 3; ++ch) r.tint[ch] = p.tint[ch];
     c.patches.push_back(r);
   }
   for (size_t g = 0; g < c.groups.size(); ++g) {
@@ -1254,24 +1262,30 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["pack_bytes"] = bytes.size();
   j["probes"] = probe_report(c);
   nlohmann::json maps_colour = nlohmann::json::array();
-  int three = 0, one = 0;
+  int three = 0, one = 0, tinted = 0;
   for (size_t i = 0; i < jobs.size(); ++i) {
     const ColourDecision& d = colour[i];
-    if (d.three + d.one == 0) continue;
+    if (d.three + d.one + d.tinted == 0) continue;
     three += d.three;
     one += d.one;
+    tinted += d.tinted;
     maps_colour.push_back({{"map", jobs[i].what},
                            {"patches_3_channel", d.three},
                            {"patches_1_channel", d.one},
+                           {"pieces_1_channel_tinted", d.tinted},
                            {"max_tint", d.max_spread}});
   }
   j["colour"]["rule"] =
       "a 3-channel (bounce-tinted) patch of C_l or S_ol keeps 3 channels where some texel's "
       "max - min over channels exceeds half an output step (final-map units at the authored "
-      "state); otherwise it is stored as 1 channel holding (max + min) / 2";
+      "state); otherwise it is stored as 1 channel holding (max + min) / 2. After the cut into "
+      "pieces and levels, a piece of any map still in 3 channels whose colours fit one colour "
+      "(the least-squares tint, 8 bits a channel) within a quarter of an output step at every "
+      "stored texel is stored as 1 channel with that tint";
   j["colour"]["forced"] = options.keep_colour;
   j["colour"]["patches_3_channel"] = three;
   j["colour"]["patches_1_channel_from_3"] = one;
+  j["colour"]["pieces_1_channel_tinted"] = tinted;
   j["colour"]["maps"] = maps_colour;
   return bytes;
 }

@@ -398,4 +398,46 @@ bool collapse_untinted(SourcePatch& patch, float spread) {
   return true;
 }
 
+bool collapse_to_tint(SourcePatch& patch, float tolerance) {
+  if (patch.channels != 3 || patch.values.empty()) return false;
+  const size_t n = patch.values.size() / 3;
+  // The colours' second moments; their principal eigenvector by power iteration from the mean
+  // colour (the moments are non-negative, so the iteration stays in the positive octant).
+  double m[3][3] = {}, t[3] = {};
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    for (int a = 0; a < 3; ++a) {
+      t[a] += v[a];
+      for (int b = 0; b < 3; ++b) m[a][b] += double(v[a]) * double(v[b]);
+    }
+  }
+  for (int it = 0; it < 16; ++it) {
+    double u[3] = {};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) u[a] += m[a][b] * t[b];
+    const double top = std::max({u[0], u[1], u[2]});
+    if (!(top > 0.0)) return false;  // no light at all
+    for (int a = 0; a < 3; ++a) t[a] = u[a] / top;
+  }
+  uint8_t q[3];
+  float tf[3];
+  for (int a = 0; a < 3; ++a) {
+    q[a] = uint8_t(std::clamp(std::lround(255.0 * t[a]), 0l, 255l));
+    tf[a] = float(q[a]) / 255.0f;  // what the runtime multiplies by (patch_tint)
+  }
+  const float tt = tf[0] * tf[0] + tf[1] * tf[1] + tf[2] * tf[2];  // >= 1: the largest is 255
+  std::vector<float> one(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    const float x = std::max(0.0f, (tf[0] * v[0] + tf[1] * v[1] + tf[2] * v[2]) / tt);
+    for (int a = 0; a < 3; ++a)
+      if (std::fabs(tf[a] * x - v[a]) > tolerance) return false;
+    one[i] = x;
+  }
+  patch.values = std::move(one);
+  patch.channels = 1;
+  for (int a = 0; a < 3; ++a) patch.tint[a] = q[a];
+  return true;
+}
+
 }  // namespace lightpatch::cooker

@@ -32,6 +32,9 @@ struct SourcePatch {
   // Per texel of a level-0 patch, a factor on coarsest_level()'s tolerance (empty: 1 everywhere):
   // the pack builder's looser tolerance for texels that hold bounce light alone.
   std::vector<float> tolerance_scale;
+  // A 1-channel patch's colour (pack::PatchRecord::tint): the runtime multiplies its value by
+  // tint[c] / 255 in map channel c. 255, 255, 255: grey (and every 3-channel patch).
+  uint8_t tint[3] = {255, 255, 255};
   float weight = 1.0f;     // to final-map units at the authored state (a_l for C_l/S_ol, 1 for B)
   float threshold = 0.0f;  // significance threshold in this map's units (half an output step)
 
@@ -139,5 +142,15 @@ float colour_spread(const SourcePatch& patch);
 // and the patch becomes one channel holding (max + min) / 2, within threshold / 2 of every
 // channel. `spread` is colour_spread(patch). Returns true if it collapsed.
 bool collapse_untinted(SourcePatch& patch, float spread);
+
+// Colour decision for a 3-channel patch that collapse_untinted() keeps: where its light has one
+// colour throughout (bounce light off one albedo, one light's colour times one surface's), the
+// patch becomes one channel v with a tint t (PatchRecord::tint, 8 bits a channel, its largest
+// 255): t is the colours' principal direction (the least-squares rank-1 fit of the texels'
+// colours), v = max(0, t.c / t.t) with the quantized t, and the patch collapses only where every
+// texel and channel of its stored rectangle stays within `tolerance` (map units) of t_c v. A
+// magnified patch's stored values are checked: its magnification is a convex blend of them, so
+// the bound holds at every destination texel too. Returns true if it collapsed.
+bool collapse_to_tint(SourcePatch& patch, float tolerance);
 
 }  // namespace lightpatch::cooker

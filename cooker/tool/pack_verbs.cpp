@@ -117,7 +117,8 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["moving_lights"] = moving;
   j["panes"] = {{"count", p.pane_count()}, {"bytes", p.pane_bytes()}};
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
-                                         square = 0, indirect = 0, magnified = 0, atlas_texels = 0;
+                                         square = 0, indirect = 0, magnified = 0, atlas_texels = 0,
+                                         tinted = 0;
   static_assert(pack::kMaxPatchLevel == 3, "by_level below lists four levels");
   uint64_t by_level[pack::kMaxPatchLevel + 1] = {};
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
@@ -130,6 +131,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                     pack::patch_atlas_side(r.height, level) * r.channel_count;
     negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
     one_channel += r.channel_count == 1 ? 1 : 0;
+    tinted += r.tint[0] != 255 || r.tint[1] != 255 || r.tint[2] != 255 ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
     indirect += r.target == pack::kTargetIndirectMap ? 1 : 0;
     magnified += pack::patch_level(r.flags) > 0 ? 1 : 0;
@@ -144,6 +146,8 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                   {"negative", negative},
                   {"one_channel", one_channel},
                   {"three_channel", p.patch_count() - one_channel},
+                  // Patches with a tint other than 255, 255, 255 (PatchRecord::tint).
+                  {"tinted", tinted},
                   {"square_encoded", square},
                   {"indirect_map", indirect},
                   {"magnified", magnified},
@@ -315,15 +319,16 @@ int verb_info(Args& args) {
   std::printf("groups         %u\n", pack.view.group_count());
   std::printf(
       "patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
-      "static shadow %llu; negative %llu, 1-channel %llu, square-encoded %llu, magnified %llu: "
-      "level 1 %llu, 2 %llu, 3 %llu)\n",
+      "static shadow %llu; negative %llu, 1-channel %llu, tinted %llu, square-encoded %llu, "
+      "magnified %llu: level 1 %llu, 2 %llu, 3 %llu)\n",
       pack.view.patch_count(), pt["base"].get<unsigned long long>(),
       pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
       pt["pair_correction"].get<unsigned long long>(),
       pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
-      pt["one_channel"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>(),
-      pt["magnified"].get<unsigned long long>(), pt["by_level"][1].get<unsigned long long>(),
-      pt["by_level"][2].get<unsigned long long>(), pt["by_level"][3].get<unsigned long long>());
+      pt["one_channel"].get<unsigned long long>(), pt["tinted"].get<unsigned long long>(),
+      pt["square_encoded"].get<unsigned long long>(), pt["magnified"].get<unsigned long long>(),
+      pt["by_level"][1].get<unsigned long long>(), pt["by_level"][2].get<unsigned long long>(),
+      pt["by_level"][3].get<unsigned long long>());
   std::printf("atlases        %u:", pack.view.atlas_count());
   for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
     std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);

@@ -18,7 +18,7 @@ in vec2 v_atlas;
 flat in vec4 v_mask_r;
 flat in vec4 v_mask_g;
 flat in vec4 v_mask_b;
-flat in float v_scale;
+flat in vec3 v_scale;  // scale * sign * tint, per map channel
 flat in int v_square;
 flat in vec4 v_rect;
 

@@ -17,6 +17,7 @@ layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0.
 // The patch's atlas rectangle, inclusive texels: x0, y0, x1 - 1, y1 - 1 (a magnified patch's
 // bilinear taps are clamped to it: a patch never reads a neighbour's texels).
 layout(location = 4) in vec4 a_rect;
+layout(location = 5) in vec3 a_tint;    // the patch's tint per map channel (tint / 255)
 
 uniform vec2 u_target_size;
 
@@ -24,7 +25,7 @@ out vec2 v_atlas;
 flat out vec4 v_mask_r;
 flat out vec4 v_mask_g;
 flat out vec4 v_mask_b;
-flat out float v_scale;
+flat out vec3 v_scale;  // scale * sign * tint, per map channel
 flat out int v_square;
 flat out int v_unit;
 flat out vec4 v_rect;
@@ -45,7 +46,7 @@ void main() {
     v_mask_g = channel_mask(a_patch.y + step);
     v_mask_b = channel_mask(a_patch.y + 2.0 * step);
   }
-  v_scale = a_patch.x;
+  v_scale = a_patch.x * a_tint;
   v_square = a_patch.w > 0.5 ? 1 : 0;
   v_unit = int(a_unit + 0.5);
   v_rect = a_rect;

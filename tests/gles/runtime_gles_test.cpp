@@ -171,8 +171,9 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
       o.max_patch = 6;
       o.patches_per_group = 12;
     }
-    if (seed >= 5) {  // magnified patches (levels 1 and 2) among level-0 ones
+    if (seed >= 5) {  // magnified patches (levels 1 and 2) among level-0 ones, and tints
       o.magnified_probability = 0.5f;
+      o.tinted_probability = 0.5f;
       o.max_patch = 13;
       o.patches_per_group = 6;
     }
@@ -239,7 +240,7 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
 class GlesExactPaths : public Gles, public ::testing::WithParamInterface<RecomposePath> {};
 
 TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
-  // Without and with an indirect map (L + magnified I), then with magnified patches too.
+  // Without and with an indirect map (L + magnified I), then with magnified and tinted patches.
   const struct {
     uint32_t scale;
     float magnified;
@@ -253,6 +254,7 @@ TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
     o.objects = 4;
     o.indirect_scale = scale;
     o.magnified_probability = config.magnified;
+    o.tinted_probability = config.magnified;  // tints with the magnified patches
     open(o, GetParam());
     Error error;
     SceneState state;

@@ -280,21 +280,32 @@ TEST(PackBuilder, PatchesFollowRegionsSignsAndGroups) {
     }
   }
   EXPECT_GT(negative, 0);  // the bounce rims are kept, not clipped
-  // Light 0 is tinted: its patches are 3-channel where the tint exceeds half an output step
-  // (decided per patch), the others 1-channel; the base map is always 3-channel (or split into
-  // its three channels apart, each drawing into its own map channel).
+  // Light 0 is tinted, in one colour (1, 0.8, 0.6): its patches are 1-channel with that colour
+  // as their tint (255, 204, 153), or 3-channel where the tint exceeds half an output step and
+  // one colour does not fit (decided per patch); the others 1-channel and grey; the base map
+  // 3-channel, split into its three channels apart (each drawing into its own map channel), or
+  // 1-channel with a tint where one colour fits a piece.
+  auto grey = [](const pack::PatchRecord& p) {
+    return p.tint[0] == 255 && p.tint[1] == 255 && p.tint[2] == 255;
+  };
   int tinted = 0;
   for (uint32_t i = 0; i < v.patch_count(); ++i) {
-    const pack::GroupRecord& g = v.group(v.patch(i).group);
+    const pack::PatchRecord& p = v.patch(i);
+    const pack::GroupRecord& g = v.group(p.group);
     if (g.kind == pack::kGroupBase) {
-      EXPECT_TRUE(
-          v.patch(i).channel_count == 3 ||
-          (v.patch(i).channel_count == 1 && pack::patch_destination(v.patch(i).flags) >= 0));
+      EXPECT_TRUE(p.channel_count == 3 ||
+                  (p.channel_count == 1 && (pack::patch_destination(p.flags) >= 0 || !grey(p))));
     } else if (g.light == 0) {
-      EXPECT_TRUE(v.patch(i).channel_count == 3 || v.patch(i).channel_count == 1);
-      tinted += v.patch(i).channel_count == 3 ? 1 : 0;
+      EXPECT_TRUE(p.channel_count == 3 || p.channel_count == 1);
+      if (p.channel_count == 1 && !grey(p)) {
+        ++tinted;
+        EXPECT_EQ(p.tint[0], 255) << "patch " << i;
+        EXPECT_EQ(p.tint[1], 204) << "patch " << i;
+        EXPECT_EQ(p.tint[2], 153) << "patch " << i;
+      }
     } else {
-      EXPECT_EQ(v.patch(i).channel_count, 1);
+      EXPECT_EQ(p.channel_count, 1);
+      EXPECT_TRUE(grey(p)) << "patch " << i;
     }
   }
   EXPECT_GT(tinted, 0);

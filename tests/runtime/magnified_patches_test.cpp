@@ -73,6 +73,10 @@ TEST(MagnifiedPatches, TheAtlasRectangleIsCheckedWithTheAtlasSides) {
   SyntheticOptions o = small_atlas_options();
   o.mutate = [](pack::Header&, Patches& p) { p[0].flags = uint8_t(p[0].flags | 0x20u); };
   EXPECT_NE(open_message(make_synthetic_pack(o)).find("patch 0: unknown flags"), std::string::npos);
+  // The byte after the tint is reserved.
+  o.mutate = [](pack::Header&, Patches& p) { p[1].reserved = 1; };
+  EXPECT_NE(open_message(make_synthetic_pack(o)).find("patch 1: reserved field not zero"),
+            std::string::npos);
 }
 
 // Many magnified patches of every kind, shelf-packed against each other in the atlases.
@@ -85,6 +89,7 @@ SyntheticOptions magnified_options(uint32_t seed) {
   o.patches_per_group = 6;
   o.indirect_scale = 2;
   o.magnified_probability = 0.6f;
+  o.tinted_probability = 0.4f;
   return o;
 }
 
@@ -136,7 +141,7 @@ std::vector<double> rule_map(const PackView& pack, uint32_t i, const double fact
           map.data() + (pack.map_offset(p.target) + (size_t(p.dest_y) + y) * w + p.dest_x + x) * 3;
       for (int c = 0; c < 3; ++c) {
         if (destination >= 0 && c != destination) continue;
-        t[c] += factor[c] * rule_at(pack, p, x, y, c, clamp_right, nearest);
+        t[c] += factor[c] * (p.tint[c] / 255.0) * rule_at(pack, p, x, y, c, clamp_right, nearest);
       }
     }
   }
@@ -154,11 +159,12 @@ TEST(MagnifiedPatches, TheSyntheticPackHasMagnifiedPatchesOfEveryKind) {
   PackView pack;
   ASSERT_EQ(open_message(bytes, &pack), "");
   uint32_t level[4] = {}, odd = 0, even = 0, rgb = 0, grey = 0, single = 0, square = 0, linear = 0,
-           negative = 0, subtracted = 0, indirect = 0, light_map = 0;
+           negative = 0, subtracted = 0, indirect = 0, light_map = 0, tinted = 0;
   for (uint32_t i = 0; i < pack.patch_count(); ++i) {
     const pack::PatchRecord& p = pack.patch(i);
     const uint32_t l = pack::patch_level(p.flags);
     ++level[l];
+    tinted += p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255;
     if (l == 0) continue;
     ++((p.width % 2) ? odd : even);
     ++((p.height % 2) ? odd : even);
@@ -171,8 +177,8 @@ TEST(MagnifiedPatches, TheSyntheticPackHasMagnifiedPatchesOfEveryKind) {
   EXPECT_GT(level[0], 0u);
   EXPECT_GT(level[1], 0u);
   EXPECT_GT(level[2], 0u);
-  for (uint32_t n :
-       {odd, even, rgb, grey, single, square, linear, negative, subtracted, indirect, light_map})
+  for (uint32_t n : {odd, even, rgb, grey, single, square, linear, negative, subtracted, indirect,
+                     light_map, tinted})
     EXPECT_GT(n, 0u);
 }
 
@@ -216,6 +222,37 @@ TEST(MagnifiedPatches, AddPatchesFollowsTheRule) {
     EXPECT_GT(checked, 10u);
     EXPECT_GT(nearest_gap, 0.05) << "the data does not tell bilinear from nearest";
   }
+}
+
+// Tinted patches (PatchRecord::tint), at level 0 and magnified: add_patches multiplies the value
+// added to each map channel by tint / 255, as the rule written out above does. Control: the same
+// rule without the tint is far from it.
+TEST(PatchTint, AddPatchesMultipliesEachMapChannelByItsTint) {
+  const SyntheticPack bytes = make_synthetic_pack(magnified_options(3));
+  PackView pack;
+  ASSERT_EQ(open_message(bytes, &pack), "");
+  const double factor[3] = {0.75, 1.5, 2.25};
+  uint32_t checked[2] = {0, 0};  // level 0, magnified
+  double untinted_gap = 0.0;
+  for (uint32_t i = 0; i < pack.patch_count(); ++i) {
+    const pack::PatchRecord& p = pack.patch(i);
+    if (p.tint[0] == 255 && p.tint[1] == 255 && p.tint[2] == 255) continue;
+    ++checked[pack::patch_level(p.flags) > 0 ? 1 : 0];
+    const std::vector<double> want = rule_map(pack, i, factor);
+    std::vector<double> got(want.size(), 0.0);
+    add_patches(pack, i, 1, factor, got.data());
+    double scale = 0.0;
+    for (double v : want) scale = std::max(scale, std::fabs(v));
+    for (size_t k = 0; k < want.size(); ++k)
+      ASSERT_NEAR(got[k], want[k], 1e-6 * (1.0 + scale)) << "patch " << i << " value " << k;
+    // The rule without the tint: each channel's factor divided by its tint (where not zero).
+    double untinted[3];
+    for (int c = 0; c < 3; ++c) untinted[c] = p.tint[c] ? factor[c] * 255.0 / p.tint[c] : 0.0;
+    untinted_gap = std::max(untinted_gap, max_abs_difference(want, rule_map(pack, i, untinted)));
+  }
+  EXPECT_GT(checked[0], 5u);
+  EXPECT_GT(checked[1], 5u);
+  EXPECT_GT(untinted_gap, 0.05) << "the tints do not show";
 }
 
 // Every texel of the atlas outside a magnified patch's rectangle set to 255 (then 0): the patch
@@ -266,10 +303,10 @@ TEST(MagnifiedPatches, AMagnifiedPatchNeverReadsItsAtlasNeighbours) {
   EXPECT_GT(unclamped_gap, 0.05) << "no patch's unclamped taps reach a neighbour";
 }
 
-// Golden values of magnified.lpk (format version 5 with patches at levels 1 and 2; a pack_load
-// fuzz seed too: tests/fuzz/corpus/pack_load/).
-constexpr uint64_t kMagnifiedSize = 36608;
-constexpr uint32_t kMagnifiedCrc = 0x53b0f8f0u;
+// Golden values of magnified.lpk (format version 6 with patches at levels 1 and 2 and tints; a
+// pack_load fuzz seed too: tests/fuzz/corpus/pack_load/).
+constexpr uint64_t kMagnifiedSize = 37120;
+constexpr uint32_t kMagnifiedCrc = 0xcedb5aacu;
 
 TEST(MagnifiedPatches, GoldenBytesAndEveryTruncationRefused) {
   const SyntheticPack built = make_synthetic_pack(magnified_options(3));

@@ -39,6 +39,9 @@ struct SyntheticOptions {
   // one) is of level 1 or 2 with this probability, its atlas rectangle shelf-packed against its
   // neighbours' like any other. 0 draws nothing more: packs without are unchanged.
   float magnified_probability = 0.0f;
+  // Tints (PatchRecord::tint): each patch gets a random tint (any bytes) with this probability,
+  // else 255, 255, 255, from a random stream of its own: the rest of the pack is the same.
+  float tinted_probability = 0.0f;
   // Edits the header and the patch records (not their count) before the table checksum is
   // computed: corrupt packs that only the record validation can refuse.
   std::function<void(pack::Header&, std::vector<pack::PatchRecord>&)> mutate;
@@ -119,6 +122,8 @@ struct SyntheticPack {
 inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
   using namespace pack;
   std::mt19937 rng(o.seed);
+  // Tints draw from a stream of their own: the rest of the pack is the same with and without.
+  std::mt19937 tint_rng(o.seed * 7919u + 17u);
   // The same bytes on every target (the golden pack is checked under qemu too): an integer draw
   // whose product with b - a is exact in double, so that no fused multiply-add can change it.
   auto uniform = [&](float a, float b) {
@@ -300,6 +305,11 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
       if (p.channel_count == 1 && uniform(0, 1) < 0.33f)
         p.flags = uint8_t(p.flags | (integer(1, 3) << kFlagDestinationShift));
       p.flags = uint8_t(p.flags | (level << kFlagLevelShift));
+      p.tint[0] = p.tint[1] = p.tint[2] = 255;
+      if (o.tinted_probability > 0.0f &&
+          std::uniform_real_distribution<float>(0.0f, 1.0f)(tint_rng) < o.tinted_probability)
+        for (uint8_t& t : p.tint)
+          t = uint8_t(std::uniform_int_distribution<uint32_t>(0, 255)(tint_rng));
       p.group = uint16_t(g);
       patches.push_back(p);
     }

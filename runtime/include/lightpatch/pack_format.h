@@ -1,4 +1,4 @@
-// lightpatch pack format, version 5: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 6: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -37,7 +37,10 @@
 //   v = scale * x * x       (kEncodingSquare: sqrt-encoded darks keep precision)
 //   value = kFlagNegative ? -v : v
 // A 3-channel patch adds its three values to the map's R, G, B; a 1-channel patch adds its value
-// to all three (grey) or to the one channel its flags name (patch_destination()).
+// to all three (grey) or to the one channel its flags name (patch_destination()). Each value
+// added to map channel c is first multiplied by the patch's tint, PatchRecord::tint[c] / 255
+// (255 for all three: no tint), so that a 1-channel patch can carry light of one colour
+// (bounce light tinted by an albedo) that would otherwise take three channels.
 // Values are irradiance in the lights' units (W/m^2-like "lux" for intensity 1 of the owning
 // light for contribution/shadow/correction patches; absolute for base patches).
 //
@@ -106,9 +109,10 @@ constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 
 // atlas (no gutter); a 1-channel patch may draw into one map channel (kFlagDestinationMask).
 // Version 4: light probes (sections 10-13). Version 5: moving lights and their panes (sections
 // 14-15, LightRecord::flags, kLightPane); later in version 5, magnified patches (PatchFlags
-// kFlagLevelMask), which a reader built before them refuses as unknown patch flags. A reader
-// accepts its own version only.
-constexpr uint32_t kVersion = 5;
+// kFlagLevelMask), which a reader built before them refuses as unknown patch flags. Version 6:
+// PatchRecord grew to 28 bytes with a per-patch tint. A reader accepts its own version only (a
+// pack of another version is refused with a message to cook it again).
+constexpr uint32_t kVersion = 6;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
@@ -299,13 +303,18 @@ struct PatchRecord {
   uint8_t flags;          // PatchFlags
   uint8_t target;         // PatchTarget
   uint16_t group;         // index of the owning GroupRecord (redundant, validated)
+  // Per map channel R, G, B: the value added to channel c is multiplied by tint[c] / 255
+  // ("Decoding a patch texel"). 255, 255, 255 for a patch without a tint.
+  uint8_t tint[3];
+  uint8_t reserved;  // 0
 };
-static_assert(sizeof(PatchRecord) == 24);
+static_assert(sizeof(PatchRecord) == 28);
 static_assert(offsetof(PatchRecord, dest_x) == 8);
 static_assert(offsetof(PatchRecord, atlas) == 12);
 static_assert(offsetof(PatchRecord, scale) == 16);
 static_assert(offsetof(PatchRecord, flags) == 20);
 static_assert(offsetof(PatchRecord, group) == 22);
+static_assert(offsetof(PatchRecord, tint) == 24);
 
 // An atlas: any size whose sides are multiples of kAtlasAlign (GLES 3.0 textures need not be
 // powers of two; the runtime reads them with texelFetch only). Patches may touch: a texel belongs

@@ -90,7 +90,8 @@ void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8
 // `maps`: the pack's map set (pack_view.h: the light map, then the indirect map if the pack has
 // one; RGB, 3 values per texel, row 0 = top), each patch into its own target. With `absolute`,
 // adds |factor * value| (magnitude bounds). A grey patch (one channel) adds its value to all three
-// channels, or to its one destination channel (pack::patch_destination). The patches must be
+// channels, or to its one destination channel (pack::patch_destination); every value added to map
+// channel c is multiplied by the patch's tint (patch_tint). The patches must be
 // valid indices of a validated pack. A magnified patch (level > 0) is interpolated from its
 // atlas rectangle; with `absolute`, from the absolute values (a bound of the magnitude).
 template <typename T>
@@ -109,8 +110,10 @@ void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T f
       const T v = sign * T(p.scale * patch_decode_unit(uint8_t(q), p.encoding));
       table[q] = absolute ? T(std::fabs(v)) : v;
     }
+    // The patch's tint is a factor on each map channel ("Decoding a patch texel").
     T f[3];
-    for (int c = 0; c < 3; ++c) f[c] = absolute ? T(std::fabs(factor[c])) : factor[c];
+    for (int c = 0; c < 3; ++c)
+      f[c] = (absolute ? T(std::fabs(factor[c])) : factor[c]) * patch_tint<T>(p, c);
     const uint32_t step = p.channel_count == 3 ? 1 : 0;
     const int destination = pack::patch_destination(p.flags);
     const uint32_t level = pack::patch_level(p.flags);

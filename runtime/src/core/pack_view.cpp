@@ -885,6 +885,7 @@ Status Validator::run(Parsed* out) {
       return fail(Status::kCorrupt, "patch %u: a destination channel on a %u-channel patch", i,
                   p.channel_count);
     }
+    if (p.reserved != 0) return fail(Status::kCorrupt, "patch %u: reserved field not zero", i);
   }
 
   if (h.mesh_count > 0) {

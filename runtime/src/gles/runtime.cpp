@@ -11,6 +11,7 @@
 #include "lightpatch/group_rules.h"
 #include "lightpatch/half_float.h"
 #include "lightpatch/moving_lights.h"
+#include "lightpatch/patch_decode.h"
 #include "lightpatch/platform/gl.h"
 #include "lightpatch_shaders.h"
 
@@ -20,7 +21,7 @@ namespace {
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
 constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
 // dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4 (magnified patches only).
-constexpr uint32_t kFloatsPerVertex = 13;
+constexpr uint32_t kFloatsPerVertex = 16;
 constexpr uint32_t kVertexBytes = kFloatsPerVertex * sizeof(float);
 // The scale is chosen so that the authored state's bound stays below this (16x headroom below
 // the largest half float).
@@ -487,7 +488,7 @@ Status Runtime::create_buffers(Error* error) {
     return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
   }
   for (uint32_t q = 0; q < quads; ++q) {
-    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4];
+    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4], tint[3];
     if (q < pack_.patch_count()) {
       const pack::PatchRecord& p = pack_.patch(q);
       // The destination and the atlas rectangle are given separately: a patch drawn magnified
@@ -509,6 +510,7 @@ Status Runtime::create_buffers(Error* error) {
       params[2] = destination >= 0 ? 4.0f + float(destination) : float(p.channel_count);
       params[3] = p.encoding == pack::kEncodingSquare ? 1.0f : 0.0f;
       unit = float(p.atlas % kUnits);
+      for (int c = 0; c < 3; ++c) tint[c] = patch_tint<float>(p, c);
     } else {  // a full-target quad, sampling atlas 0 stretched over it (fill-rate floor)
       const pack::AtlasRecord& a0 = pack_.atlas(0);
       const uint8_t target =
@@ -518,6 +520,7 @@ Status Runtime::create_buffers(Error* error) {
       params[0] = 1.0f, params[1] = 0.0f, params[2] = 3.0f, params[3] = 0.0f;
       unit = 0.0f;
       rect[0] = rect[1] = 0.0f, rect[2] = ax1 - 1.0f, rect[3] = ay1 - 1.0f;
+      tint[0] = tint[1] = tint[2] = 1.0f;
     }
     const float corners[4][4] = {
         {dx0, dy0, ax0, ay0}, {dx1, dy0, ax1, ay0}, {dx0, dy1, ax0, ay1}, {dx1, dy1, ax1, ay1}};
@@ -527,6 +530,7 @@ Status Runtime::create_buffers(Error* error) {
       std::memcpy(v + 4, params, sizeof params);
       v[8] = unit;
       std::memcpy(v + 9, rect, sizeof rect);
+      std::memcpy(v + 13, tint, sizeof tint);
     }
     const uint32_t b = q * 4;
     const uint32_t quad[6] = {b, b + 1, b + 2, b + 2, b + 1, b + 3};
@@ -556,6 +560,9 @@ Status Runtime::create_buffers(Error* error) {
   glEnableVertexAttribArray(4);
   glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, kVertexBytes,
                         reinterpret_cast<const void*>(9 * sizeof(float)));
+  glEnableVertexAttribArray(5);
+  glVertexAttribPointer(5, 3, GL_FLOAT, GL_FALSE, kVertexBytes,
+                        reinterpret_cast<const void*>(13 * sizeof(float)));
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   memory_.vertex_buffer = vbytes;

@@ -33,9 +33,13 @@ struct PackOptions {
   // the fewest atlas bytes per scene in our measurements (README, Numbers).
   int tile_size = 32;
   EncodingPolicy encoding = EncodingPolicy::kAuto;
-  // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step
-  // (the effect plan forced on, `cook --no-plan`).
+  // Keep every 3-channel patch at 3 channels, even where its tint stays below the output step or
+  // one colour fits it (collapse_to_tint) (the effect plan forced on, `cook --no-plan`).
   bool keep_colour = false;
+  // Store a piece still in 3 channels after the cut whose light has one colour as 1 channel and a
+  // tint (collapse_to_tint; pack_format.h, PatchRecord::tint). Off: such pieces keep 3 channels
+  // (the packs of format 5, for comparisons).
+  bool tint_pieces = true;
   // Store every light group that has an indirect part split into its indirect-map and light-map
   // parts, whatever it costs (otherwise chosen per light group by atlas texels).
   bool always_split = false;
