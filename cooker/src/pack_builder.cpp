@@ -719,7 +719,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
             [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
       }
       // The pieces still in colour whose light has one colour (one light on one albedo): one
-      // channel and a tint, within a quarter of an output step (collapse_untinted's bound).
+      // channel and a tint, within a quarter of an output step (collapse_untinted's bound), times
+      // a bounce-only texel's tolerance scale (the bounce tolerance's share of the same quarter).
       if (!options.keep_colour && options.tint_pieces) {
         for (size_t k = first; k < out.size(); ++k)
           if (out[k].channels == 3 && collapse_to_tint(out[k], 0.5f * j.threshold)) ++d.tinted;
