@@ -131,7 +131,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                     pack::patch_atlas_side(r.height, level) * r.channel_count;
     negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
     one_channel += r.channel_count == 1 ? 1 : 0;
-    tinted += r.tint[0] != 255 || r.tint[1] != 255 || r.tint[2] != 255 ? 1 : 0;
+    tinted += pack::patch_has_tint(r) ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
     indirect += r.target == pack::kTargetIndirectMap ? 1 : 0;
     magnified += pack::patch_level(r.flags) > 0 ? 1 : 0;

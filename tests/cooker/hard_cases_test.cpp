@@ -712,6 +712,14 @@ TEST(HardCases, IndirectMapHoldsTheBounceLightAndRecomposesLikeBakeState) {
   RecordProperty("worst_relative_rmse", std::to_string(expect_standard_states_match(c)));
 }
 
+// A pack's atlas bytes (RGBA8, every atlas whole).
+uint64_t atlas_bytes(const PackView& v) {
+  uint64_t b = 0;
+  for (uint32_t a = 0; a < v.atlas_count(); ++a)
+    b += uint64_t(v.atlas(a).width) * v.atlas(a).height * 4;
+  return b;
+}
+
 // Two packs of the same scene recomposed in one state, at every valid texel: relative RMSE and
 // signed bias of `b` against `a`, and the largest difference in output steps beyond 1 % of the
 // texel (the 8-bit codes' own rounding grows with the patch's brightest texel, and each pack
@@ -769,12 +777,6 @@ TEST(HardCases, LightMapPatchLevelsSaveBytesAndRecomposeLikeBakeState) {
   cook(full, 128, draft(true), po0);
   cook(levels, 128, draft(true), po);
   ASSERT_FALSE(HasFatalFailure());
-  auto atlas_bytes = [](const PackView& v) {
-    uint64_t b = 0;
-    for (uint32_t a = 0; a < v.atlas_count(); ++a)
-      b += uint64_t(v.atlas(a).width) * v.atlas(a).height * 4;
-    return b;
-  };
   uint32_t magnified[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
     const PackView& v = k ? levels.pack : full.pack;
@@ -820,12 +822,6 @@ TEST(HardCases, PatchesWithATintSaveBytesAndRecomposeLikeThreeChannels) {
   cook(colour, 128, draft(true), po);
   cook(tinted, 128, draft(true));
   ASSERT_FALSE(HasFatalFailure());
-  auto atlas_bytes = [](const PackView& v) {
-    uint64_t b = 0;
-    for (uint32_t a = 0; a < v.atlas_count(); ++a)
-      b += uint64_t(v.atlas(a).width) * v.atlas(a).height * 4;
-    return b;
-  };
   // Patches with a tint, and the atlas channel-texels the patches take (the atlases of so small
   // a pack round to the same size).
   uint32_t with_tint[2] = {0, 0};
@@ -834,7 +830,7 @@ TEST(HardCases, PatchesWithATintSaveBytesAndRecomposeLikeThreeChannels) {
     const PackView& v = k ? tinted.pack : colour.pack;
     for (uint32_t i = 0; i < v.patch_count(); ++i) {
       const pack::PatchRecord& p = v.patch(i);
-      with_tint[k] += p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255;
+      with_tint[k] += pack::patch_has_tint(p);
       const uint32_t level = pack::patch_level(p.flags);
       channel_texels[k] += uint64_t(pack::patch_atlas_side(p.width, level)) *
                            pack::patch_atlas_side(p.height, level) * p.channel_count;
@@ -908,12 +904,6 @@ TEST(HardCases, DirectAndBouncePartsSaveBytesAndStayWithinTheBounceTolerance) {
         PackView::open(bytes->data(), bytes->size(), RecomposeLimits::format_only(), view, &error),
         Status::kOk)
         << error.message;
-  auto atlas_bytes = [](const PackView& v) {
-    uint64_t b = 0;
-    for (uint32_t a = 0; a < v.atlas_count(); ++a)
-      b += uint64_t(v.atlas(a).width) * v.atlas(a).height * 4;
-    return b;
-  };
   const nlohmann::json& d = parts.report.root()["pack"]["direct_and_bounce_parts"];
   const nlohmann::json& da = always_report.root()["pack"]["direct_and_bounce_parts"];
   EXPECT_TRUE(whole_report.root()["pack"]["direct_and_bounce_parts"]["maps"].empty());

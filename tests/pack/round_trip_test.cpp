@@ -285,19 +285,17 @@ TEST(PackBuilder, PatchesFollowRegionsSignsAndGroups) {
   // one colour does not fit (decided per patch); the others 1-channel and grey; the base map
   // 3-channel, split into its three channels apart (each drawing into its own map channel), or
   // 1-channel with a tint where one colour fits a piece.
-  auto grey = [](const pack::PatchRecord& p) {
-    return p.tint[0] == 255 && p.tint[1] == 255 && p.tint[2] == 255;
-  };
   int tinted = 0;
   for (uint32_t i = 0; i < v.patch_count(); ++i) {
     const pack::PatchRecord& p = v.patch(i);
     const pack::GroupRecord& g = v.group(p.group);
     if (g.kind == pack::kGroupBase) {
       EXPECT_TRUE(p.channel_count == 3 ||
-                  (p.channel_count == 1 && (pack::patch_destination(p.flags) >= 0 || !grey(p))));
+                  (p.channel_count == 1 &&
+                   (pack::patch_destination(p.flags) >= 0 || pack::patch_has_tint(p))));
     } else if (g.light == 0) {
       EXPECT_TRUE(p.channel_count == 3 || p.channel_count == 1);
-      if (p.channel_count == 1 && !grey(p)) {
+      if (p.channel_count == 1 && pack::patch_has_tint(p)) {
         ++tinted;
         EXPECT_EQ(p.tint[0], 255) << "patch " << i;
         EXPECT_EQ(p.tint[1], 204) << "patch " << i;
@@ -305,7 +303,7 @@ TEST(PackBuilder, PatchesFollowRegionsSignsAndGroups) {
       }
     } else {
       EXPECT_EQ(p.channel_count, 1);
-      EXPECT_TRUE(grey(p)) << "patch " << i;
+      EXPECT_FALSE(pack::patch_has_tint(p)) << "patch " << i;
     }
   }
   EXPECT_GT(tinted, 0);

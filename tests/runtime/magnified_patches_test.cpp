@@ -164,7 +164,7 @@ TEST(MagnifiedPatches, TheSyntheticPackHasMagnifiedPatchesOfEveryKind) {
     const pack::PatchRecord& p = pack.patch(i);
     const uint32_t l = pack::patch_level(p.flags);
     ++level[l];
-    tinted += p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255;
+    tinted += pack::patch_has_tint(p);
     if (l == 0) continue;
     ++((p.width % 2) ? odd : even);
     ++((p.height % 2) ? odd : even);
@@ -236,7 +236,7 @@ TEST(PatchTint, AddPatchesMultipliesEachMapChannelByItsTint) {
   double untinted_gap = 0.0;
   for (uint32_t i = 0; i < pack.patch_count(); ++i) {
     const pack::PatchRecord& p = pack.patch(i);
-    if (p.tint[0] == 255 && p.tint[1] == 255 && p.tint[2] == 255) continue;
+    if (!pack::patch_has_tint(p)) continue;
     ++checked[pack::patch_level(p.flags) > 0 ? 1 : 0];
     const std::vector<double> want = rule_map(pack, i, factor);
     std::vector<double> got(want.size(), 0.0);

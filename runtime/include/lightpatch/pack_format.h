@@ -316,6 +316,11 @@ static_assert(offsetof(PatchRecord, flags) == 20);
 static_assert(offsetof(PatchRecord, group) == 22);
 static_assert(offsetof(PatchRecord, tint) == 24);
 
+// Whether a patch carries a tint (a factor other than 1 on some map channel).
+constexpr bool patch_has_tint(const PatchRecord& p) {
+  return p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255;
+}
+
 // An atlas: any size whose sides are multiples of kAtlasAlign (GLES 3.0 textures need not be
 // powers of two; the runtime reads them with texelFetch only). Patches may touch: a texel belongs
 // to at most one patch per channel, and a reader reads a patch's own rectangle only, so texels no

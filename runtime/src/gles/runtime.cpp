@@ -20,7 +20,8 @@ namespace {
 
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
 constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
-// dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4 (magnified patches only).
+// dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4 (magnified patches only),
+// tint 3.
 constexpr uint32_t kFloatsPerVertex = 16;
 constexpr uint32_t kVertexBytes = kFloatsPerVertex * sizeof(float);
 // The scale is chosen so that the authored state's bound stays below this (16x headroom below
