@@ -719,8 +719,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
             [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
       }
       // The pieces still in colour whose light has one colour (one light on one albedo): one
-      // channel and a tint, within a quarter of an output step (collapse_untinted's bound), times
-      // a bounce-only texel's tolerance scale where the piece has one (as coarsest_level's).
+      // channel and a tint, within a quarter of an output step (collapse_untinted's bound), at
+      // bounce-only texels too: their bounce tolerance there darkened dim texels (README).
       if (!options.keep_colour && options.tint_pieces) {
         for (size_t k = first; k < out.size(); ++k)
           if (out[k].channels == 3 && collapse_to_tint(out[k], 0.5f * j.threshold)) ++d.tinted;
@@ -1282,8 +1282,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       "state); otherwise it is stored as 1 channel holding (max + min) / 2. After the cut into "
       "pieces and levels, a piece of any map still in 3 channels whose colours fit one colour "
       "(the least-squares tint, 8 bits a channel) within a quarter of an output step at every "
-      "stored texel, times a bounce-only texel's bounce tolerance scale, is stored as 1 channel "
-      "with that tint";
+      "stored texel is stored as 1 channel with that tint";
   j["colour"]["forced"] = options.keep_colour;
   j["colour"]["patches_3_channel"] = three;
   j["colour"]["patches_1_channel_from_3"] = one;

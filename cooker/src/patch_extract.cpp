@@ -430,11 +430,8 @@ bool collapse_to_tint(SourcePatch& patch, float tolerance) {
   for (size_t i = 0; i < n; ++i) {
     const float* v = &patch.values[3 * i];
     const float x = std::max(0.0f, (tf[0] * v[0] + tf[1] * v[1] + tf[2] * v[2]) / tt);
-    // A bounce-only texel's looser bound (SourcePatch::tolerance_scale, level 0 only).
-    const float at =
-        patch.tolerance_scale.size() == n ? tolerance * patch.tolerance_scale[i] : tolerance;
     for (int a = 0; a < 3; ++a)
-      if (std::fabs(tf[a] * x - v[a]) > at) return false;
+      if (std::fabs(tf[a] * x - v[a]) > tolerance) return false;
     one[i] = x;
   }
   patch.values = std::move(one);

@@ -148,8 +148,7 @@ bool collapse_untinted(SourcePatch& patch, float spread);
 // patch becomes one channel v with a tint t (PatchRecord::tint, 8 bits a channel, its largest
 // 255): t is the colours' principal direction (the least-squares rank-1 fit of the texels'
 // colours), v = max(0, t.c / t.t) with the quantized t, and the patch collapses only where every
-// texel and channel of its stored rectangle stays within `tolerance` (map units; times the
-// texel's tolerance_scale where a level-0 patch has one: bounce-only texels) of t_c v. A
+// texel and channel of its stored rectangle stays within `tolerance` (map units) of t_c v. A
 // magnified patch's stored values are checked: its magnification is a convex blend of them, so
 // the bound holds at every destination texel too. Returns true if it collapsed.
 bool collapse_to_tint(SourcePatch& patch, float tolerance);

@@ -93,33 +93,6 @@ TEST(CollapseToTint, TheToleranceDecides) {
   EXPECT_EQ(tight.channels, 3);
 }
 
-// A texel's tolerance_scale (bounce-only texels of a level-0 piece) loosens its bound alone: a
-// patch whose colour drifts only where the scale is 4 collapses at a tolerance that fails without
-// the scale, and not when the drifting texels' scale is 1.
-TEST(CollapseToTint, ATexelsToleranceScaleLoosensItsBoundAlone) {
-  const SourcePatch original = coloured(8, 8, [](int x, int) {
-    return x < 6 ? std::array<float, 3>{0.6f, 0.45f, 0.3f} : std::array<float, 3>{0.6f, 0.5f, 0.3f};
-  });
-  SourcePatch plain = original;
-  float tolerance = 0.0f;  // the smallest that passes with the scale, found below
-  for (float t = 1e-4f; t < 1.0f; t *= 1.25f) {
-    SourcePatch scaled = original;
-    scaled.tolerance_scale.assign(64, 1.0f);
-    for (int y = 0; y < 8; ++y)
-      for (int x = 6; x < 8; ++x) scaled.tolerance_scale[size_t(y) * 8 + x] = 4.0f;
-    if (collapse_to_tint(scaled, t)) {
-      tolerance = t;
-      EXPECT_EQ(scaled.channels, 1);
-      break;
-    }
-  }
-  ASSERT_GT(tolerance, 0.0f);
-  EXPECT_FALSE(collapse_to_tint(plain, tolerance));
-  SourcePatch ones = original;
-  ones.tolerance_scale.assign(64, 1.0f);
-  EXPECT_FALSE(collapse_to_tint(ones, tolerance));
-}
-
 // Grey light collapses with tint 255, 255, 255; a patch without light, and one of one channel,
 // are left alone.
 TEST(CollapseToTint, GreyDarkAndOneChannelPatches) {
