@@ -130,6 +130,12 @@ bool fill(const std::vector<PackItem>& items, const std::vector<size_t>& order, 
     if (it.channels == 3) {
       merge(channels.data(), 3, width, rgb);
       if (find(rgb, width, height, w, h, &x, &y)) channel = 0;
+    } else if (it.channels == 2) {
+      // The lowest place of channels 0-1 or 2-3 together.
+      for (int c = 0; c < 4; c += 2) {
+        merge(channels.data() + c, 2, width, rgb);
+        if (find(rgb, width, height, w, h, &x, &y)) channel = c;
+      }
     } else {
       // The lowest place in any channel: 1-channel patches fill the alpha plane under 3-channel
       // ones before they raise the atlas.
@@ -171,7 +177,7 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
   }
   for (const PackItem& it : items) {
     if (it.width < 1 || it.height < 1 || it.width > max_size || it.height > max_size ||
-        (it.channels != 1 && it.channels != 3)) {
+        it.channels < 1 || it.channels > 3) {
       throw CookError("a " + std::to_string(it.width) + "x" + std::to_string(it.height) + "x" +
                       std::to_string(it.channels) + " patch does not fit a " +
                       std::to_string(max_size) + " atlas");
@@ -182,7 +188,11 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     const PackItem& p = items[a];
     const PackItem& q = items[b];
-    if (p.channels != q.channels) return p.channels > q.channels;
+    // 2-channel patches first, in pairs (channels 0-1 and 2-3 of one place); then 3-channel ones
+    // above them, whose alpha plane the 1-channel ones fill last. (2-channel patches after the
+    // 3-channel ones would raise the alpha plane's skyline over their empty alpha.)
+    auto rank = [](int channels) { return channels == 2 ? 0 : channels == 3 ? 1 : 2; };
+    if (p.channels != q.channels) return rank(p.channels) < rank(q.channels);
     if (p.height != q.height) return p.height > q.height;
     return p.width > q.width;
   });

@@ -48,10 +48,17 @@ void add_decoded(const SourcePatch& patch, const QuantizedPatch& q, FloatImage& 
   for (int y = 0; y < r.h; ++y)
     for (int x = 0; x < r.w; ++x)
       for (int c = 0; c < map.channels; ++c) {
-        const int pc = patch.channels == 1 ? 0 : c;
-        const uint8_t code = q.codes[(size_t(y) * r.w + x) * size_t(patch.channels) + size_t(pc)];
-        map.at(r.x + x, r.y + y, c) +=
-            sign * q.scale * patch_decode_unit(code, q.encoding) * (float(patch.tint[c]) / 255.0f);
+        const uint8_t* codes = &q.codes[(size_t(y) * r.w + x) * size_t(patch.channels)];
+        auto value = [&](int k) {
+          return sign * q.scale * patch_decode_unit(codes[k], q.encoding);
+        };
+        float v;
+        if (patch.channels == 2)  // two tints (pack_format.h, "Decoding a patch texel")
+          v = value(0) * (float(patch.tint[c]) / 255.0f) +
+              value(1) * (float(patch.tint_b[c]) / 255.0f);
+        else
+          v = value(patch.channels == 1 ? 0 : c) * (float(patch.tint[c]) / 255.0f);
+        map.at(r.x + x, r.y + y, c) += v;
       }
 }
 

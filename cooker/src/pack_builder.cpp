@@ -124,7 +124,9 @@ std::vector<StoredPatch> split_for_alpha(const std::vector<SourcePatch>& patches
   std::map<int, int64_t> change;                     // texels each light's change draws
   for (size_t i = 0; i < patches.size(); ++i) {
     const SourcePatch& p = patches[i];
-    (p.channels == 3 ? rgb : grey) += stored(i);
+    // 2-channel patches pair up (channels 0-1 and 2-3 of one place): they leave the alpha plane
+    // under 3-channel patches to the 1-channel ones.
+    if (p.channels != 2) (p.channels == 3 ? rgb : grey) += stored(i);
     if (group_has_light(p.kind)) change[p.light] += texels(i);
     if (p.channels != 3) continue;
     if (!group_has_light(p.kind))
@@ -590,6 +592,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   struct ColourDecision {
     int three = 0, one = 0;  // 3-channel patches kept, collapsed to 1
     int tinted = 0;          // final pieces collapsed to 1 channel with a tint
+    int two_tints = 0;       // final pieces collapsed to 2 channels with a tint each
     float max_spread = 0.0f;
   };
   std::vector<ColourDecision> colour(jobs.size());
@@ -620,6 +623,15 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
     // so a patch keeps three channels only where the tint shows above the 8-bit step (B is
     // always 3: authored colours).
+    // A piece's colours (the last step of a cut, below): one tint, else two, else three
+    // channels; returns the channels it keeps.
+    const bool tint_pieces = !options.keep_colour && options.tint_pieces;
+    auto decide_colour = [&](SourcePatch& p) {
+      const float tolerance = 0.5f * j.threshold;
+      if (collapse_to_tint(p, tolerance)) return 1;
+      if (collapse_to_two_tints(p, tolerance)) return 2;
+      return 3;
+    };
     auto cut = [&](const FloatImage& map, const std::vector<Region>& regions, uint8_t target,
                    std::vector<SourcePatch>& out, ColourDecision& d, const CutRule& rule) {
       const size_t first = out.size();
@@ -645,6 +657,14 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       if (target == kTargetLightMap && options.max_patch_level > 0) {
         // The job's threshold is half an output step.
         const float tolerance = 2.0f * options.level_tolerance * j.threshold;
+        // What a piece costs once its colour is decided (the last step below): a patch whose
+        // light mixes many colours may leave pieces of one or two.
+        auto piece_bytes = [&](const SourcePatch& p) -> uint64_t {
+          if (!tint_pieces || p.channels != 3) return patch_bytes(p);
+          SourcePatch c = p;
+          decide_colour(c);
+          return patch_bytes(c);
+        };
         // Stores p at the coarsest level its error allows; returns that level.
         auto store_coarsest = [&](SourcePatch& p) {
           SourcePatch reduced;
@@ -669,11 +689,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
               else
                 finer.push_back(std::move(t));
               for (SourcePatch& f : finer) {
-                split_bytes += patch_bytes(f);
+                split_bytes += piece_bytes(f);
                 tiles.push_back(std::move(f));
               }
             }
-            if (!tiles.empty() && split_bytes < patch_bytes(p)) return tiles;
+            if (!tiles.empty() && split_bytes < piece_bytes(p)) return tiles;
           }
           one.push_back(std::move(p));
           return one;
@@ -692,7 +712,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
             for (SourcePatch& c : split_by_charts(whole, regions, inset)) {
               store_coarsest(c);
               for (SourcePatch& t : tiled(std::move(c), kLevelTile)) {
-                *total += patch_bytes(t);
+                *total += piece_bytes(t);
                 pieces.push_back(std::move(t));
               }
             }
@@ -702,7 +722,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           std::vector<SourcePatch> pieces = chart_pieces(0, &pieces_bytes);
           std::vector<SourcePatch> tiles = tiled(p, kLevelTile);
           uint64_t tiles_bytes = 0;
-          for (const SourcePatch& t : tiles) tiles_bytes += patch_bytes(t);
+          for (const SourcePatch& t : tiles) tiles_bytes += piece_bytes(t);
           if (!pieces.empty() && pieces_bytes < tiles_bytes) {
             // Chosen on whole chart rectangles; stored without the border's outer rings, which
             // no mesh reads (choosing on the inset pieces cut 2.5x as many patches on the full
@@ -718,12 +738,18 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
             out.begin() + std::ptrdiff_t(first), out.end(),
             [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
       }
-      // The pieces still in colour whose light has one colour (one light on one albedo): one
-      // channel and a tint, within a quarter of an output step (collapse_untinted's bound), at
-      // bounce-only texels too: their bounce tolerance there darkened dim texels (README).
-      if (!options.keep_colour && options.tint_pieces) {
-        for (size_t k = first; k < out.size(); ++k)
-          if (out[k].channels == 3 && collapse_to_tint(out[k], 0.5f * j.threshold)) ++d.tinted;
+      // The pieces still in colour whose light has one colour (one light on one albedo) or two
+      // (two lights' colours, a light's direct light and its bounce off one albedo): one channel
+      // and a tint, or two channels and a tint each, within a quarter of an output step
+      // (collapse_untinted's bound), at bounce-only texels too: their bounce tolerance there
+      // darkened dim texels (README).
+      if (tint_pieces) {
+        for (size_t k = first; k < out.size(); ++k) {
+          if (out[k].channels != 3) continue;
+          const int channels = decide_colour(out[k]);
+          d.tinted += channels == 1 ? 1 : 0;
+          d.two_tints += channels == 2 ? 1 : 0;
+        }
       }
     };
     auto cost = [](const std::vector<SourcePatch>& v) {
@@ -1008,7 +1034,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                       (destination >= 0 ? (destination + 1) << kFlagDestinationShift : 0) |
                       (uint32_t(p.level) << kFlagLevelShift));
     r.target = p.target;
-    for (int ch = 0; ch < 3; ++ch) r.tint[ch] = p.tint[ch];
+    for (int ch = 0; ch < 3; ++ch) {
+      r.tint[ch] = p.tint[ch];
+      r.tint_b[ch] = p.channels == 2 ? p.tint_b[ch] : 0;
+    }
     c.patches.push_back(r);
   }
   for (size_t g = 0; g < c.groups.size(); ++g) {
@@ -1263,17 +1292,19 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["pack_bytes"] = bytes.size();
   j["probes"] = probe_report(c);
   nlohmann::json maps_colour = nlohmann::json::array();
-  int three = 0, one = 0, tinted = 0;
+  int three = 0, one = 0, tinted = 0, two_tints = 0;
   for (size_t i = 0; i < jobs.size(); ++i) {
     const ColourDecision& d = colour[i];
-    if (d.three + d.one + d.tinted == 0) continue;
+    if (d.three + d.one + d.tinted + d.two_tints == 0) continue;
     three += d.three;
     one += d.one;
     tinted += d.tinted;
+    two_tints += d.two_tints;
     maps_colour.push_back({{"map", jobs[i].what},
                            {"patches_3_channel", d.three},
                            {"patches_1_channel", d.one},
                            {"pieces_1_channel_tinted", d.tinted},
+                           {"pieces_2_channel_tinted", d.two_tints},
                            {"max_tint", d.max_spread}});
   }
   j["colour"]["rule"] =
@@ -1287,6 +1318,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["colour"]["patches_3_channel"] = three;
   j["colour"]["patches_1_channel_from_3"] = one;
   j["colour"]["pieces_1_channel_tinted"] = tinted;
+  j["colour"]["pieces_2_channel_tinted"] = two_tints;
   j["colour"]["maps"] = maps_colour;
   return bytes;
 }

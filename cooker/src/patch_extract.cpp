@@ -440,4 +440,133 @@ bool collapse_to_tint(SourcePatch& patch, float tolerance) {
   return true;
 }
 
+namespace {
+
+// The eigenvectors of a symmetric 3x3 matrix (cyclic Jacobi rotations), as the columns of `vec`
+// ordered by decreasing eigenvalue.
+void symmetric_eigen3(const double m[3][3], double vec[3][3]) {
+  double a[3][3], v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) a[i][k] = m[i][k];
+  for (int sweep = 0; sweep < 32; ++sweep) {
+    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+    if (!(off > 1e-30 * diag)) break;
+    for (int p = 0; p < 2; ++p) {
+      for (int q = p + 1; q < 3; ++q) {
+        if (a[p][q] == 0.0) continue;
+        const double theta = 0.5 * (a[q][q] - a[p][p]) / a[p][q];
+        const double t =
+            (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1.0 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // a <- a J (columns p, q)
+          const double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // a <- J^T a (rows p, q)
+          const double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - s * vkq;
+          v[k][q] = s * vkp + c * vkq;
+        }
+      }
+    }
+  }
+  int order[3] = {0, 1, 2};
+  std::sort(order, order + 3, [&](int x, int y) { return a[x][x] > a[y][y]; });
+  for (int col = 0; col < 3; ++col)
+    for (int k = 0; k < 3; ++k) vec[k][col] = v[k][order[col]];
+}
+
+}  // namespace
+
+bool collapse_to_two_tints(SourcePatch& patch, float tolerance) {
+  if (patch.channels != 3 || patch.values.empty()) return false;
+  const size_t n = patch.values.size() / 3;
+  double m[3][3] = {};
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) m[a][b] += double(v[a]) * double(v[b]);
+  }
+  double e[3][3];
+  symmetric_eigen3(m, e);
+  // The plane of the two largest: e1 is the moments' Perron vector, so every colour has e1.v >= 0.
+  double e1[3] = {e[0][0], e[1][0], e[2][0]}, e2[3] = {e[0][1], e[1][1], e[2][1]};
+  if (e1[0] + e1[1] + e1[2] < 0)
+    for (double& x : e1) x = -x;
+  // The cone of the colours in that plane: its two extreme rays are the tints, so that every
+  // colour is a non-negative blend of them. Colours within the tolerance of black (which two
+  // zeros hold) do not widen it: their direction is noise.
+  double lo = INFINITY, hi = -INFINITY;
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    if (std::max({v[0], v[1], v[2]}) <= tolerance) continue;
+    const double p = e1[0] * v[0] + e1[1] * v[1] + e1[2] * v[2];
+    const double q = e2[0] * v[0] + e2[1] * v[1] + e2[2] * v[2];
+    const double angle = std::atan2(q, p);
+    lo = std::min(lo, angle);
+    hi = std::max(hi, angle);
+  }
+  if (!(lo <= hi)) return false;
+  uint8_t tq[2][3];
+  float tf[2][3];
+  for (int r = 0; r < 2; ++r) {
+    const double angle = r == 0 ? lo : hi;
+    double t[3], top = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      t[a] = std::max(0.0, std::cos(angle) * e1[a] + std::sin(angle) * e2[a]);
+      top = std::max(top, t[a]);
+    }
+    if (!(top > 0.0)) return false;
+    for (int a = 0; a < 3; ++a) {
+      tq[r][a] = uint8_t(std::clamp(std::lround(255.0 * t[a] / top), 0l, 255l));
+      tf[r][a] = float(tq[r][a]) / 255.0f;  // what the runtime multiplies by (patch_tint)
+    }
+  }
+  // Each texel's non-negative least-squares blend of the two quantized tints.
+  const float g00 = tf[0][0] * tf[0][0] + tf[0][1] * tf[0][1] + tf[0][2] * tf[0][2];  // >= 1
+  const float g11 = tf[1][0] * tf[1][0] + tf[1][1] * tf[1][1] + tf[1][2] * tf[1][2];  // >= 1
+  const float g01 = tf[0][0] * tf[1][0] + tf[0][1] * tf[1][1] + tf[0][2] * tf[1][2];
+  const float det = g00 * g11 - g01 * g01;
+  if (!(det > 1e-4f * g00 * g11)) return false;  // one tint twice: collapse_to_tint's case
+  std::vector<float> two(2 * n);
+  float top_a = 0.0f, top_b = 0.0f;
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &patch.values[3 * i];
+    const float ra = tf[0][0] * v[0] + tf[0][1] * v[1] + tf[0][2] * v[2];
+    const float rb = tf[1][0] * v[0] + tf[1][1] * v[1] + tf[1][2] * v[2];
+    float a = (g11 * ra - g01 * rb) / det, b = (g00 * rb - g01 * ra) / det;
+    if (a < 0.0f || b < 0.0f) {  // on the cone's edge: the better of the two single tints
+      const float a1 = std::max(0.0f, ra / g00), b1 = std::max(0.0f, rb / g11);
+      float ea = 0.0f, eb = 0.0f;
+      for (int c = 0; c < 3; ++c) {
+        ea += (tf[0][c] * a1 - v[c]) * (tf[0][c] * a1 - v[c]);
+        eb += (tf[1][c] * b1 - v[c]) * (tf[1][c] * b1 - v[c]);
+      }
+      a = ea <= eb ? a1 : 0.0f;
+      b = ea <= eb ? 0.0f : b1;
+    }
+    for (int c = 0; c < 3; ++c)
+      if (std::fabs(tf[0][c] * a + tf[1][c] * b - v[c]) > tolerance) return false;
+    two[2 * i] = a;
+    two[2 * i + 1] = b;
+    top_a = std::max(top_a, a);
+    top_b = std::max(top_b, b);
+  }
+  if (!(top_a > 0.0f) || !(top_b > 0.0f)) return false;  // one tint holds it: collapse_to_tint's
+  patch.values = std::move(two);
+  patch.channels = 2;
+  for (int a = 0; a < 3; ++a) {
+    patch.tint[a] = tq[0][a];
+    patch.tint_b[a] = tq[1][a];
+  }
+  return true;
+}
+
 }  // namespace lightpatch::cooker

@@ -19,7 +19,7 @@ struct SourcePatch {
   int object_b = -1;  // second object of a pair correction, or -1
   bool negative = false;
   uint8_t target = 0;  // pack::PatchTarget
-  int channels = 1;    // 1 or 3
+  int channels = 1;    // 1, 2 (two tints: collapse_to_two_tints) or 3
   Rect dest;           // in the target map
   // Level (pack_format.h, "Magnified patches"): stored at 1/2^level of the target map's
   // resolution per axis, stored_w() x stored_h() texels that the runtime magnifies into `dest`.
@@ -33,8 +33,10 @@ struct SourcePatch {
   // the pack builder's looser tolerance for texels that hold bounce light alone.
   std::vector<float> tolerance_scale;
   // A 1-channel patch's colour (pack::PatchRecord::tint): the runtime multiplies its value by
-  // tint[c] / 255 in map channel c. 255, 255, 255: grey (and every 3-channel patch).
+  // tint[c] / 255 in map channel c. 255, 255, 255: grey (and every 3-channel patch). A 2-channel
+  // patch's first channel's colour, and tint_b its second's (0, 0, 0 for other patches).
   uint8_t tint[3] = {255, 255, 255};
+  uint8_t tint_b[3] = {0, 0, 0};
   float weight = 1.0f;     // to final-map units at the authored state (a_l for C_l/S_ol, 1 for B)
   float threshold = 0.0f;  // significance threshold in this map's units (half an output step)
 
@@ -152,5 +154,17 @@ bool collapse_untinted(SourcePatch& patch, float spread);
 // magnified patch's stored values are checked: its magnification is a convex blend of them, so
 // the bound holds at every destination texel too. Returns true if it collapsed.
 bool collapse_to_tint(SourcePatch& patch, float tolerance);
+
+// Colour decision for a 3-channel patch that collapse_to_tint() keeps: where its colours lie,
+// within `tolerance`, in the cone of two colours (two lights of different colours; one light's
+// direct light and its bounce off a coloured wall), the patch becomes 2 channels, each with a tint
+// (PatchRecord::tint and tint_b), whose blend the runtime adds in one quad. The plane is the
+// colours' least-squares one (the moments' two largest eigenvectors), the tints its cone's extreme
+// rays (8 bits, each channel's largest 255), each texel the non-negative least-squares blend of the
+// quantized tints, and the patch collapses only where every texel and channel of its stored
+// rectangle stays within `tolerance` (map units) of that blend: linear in the values, so a
+// magnified patch holds the bound at every destination texel as collapse_to_tint's does. Returns
+// true if it collapsed.
+bool collapse_to_two_tints(SourcePatch& patch, float tolerance);
 
 }  // namespace lightpatch::cooker

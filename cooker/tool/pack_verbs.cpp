@@ -118,7 +118,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
   j["panes"] = {{"count", p.pane_count()}, {"bytes", p.pane_bytes()}};
   uint64_t by_kind[pack::kGroupKindMax + 1] = {}, texels = 0, negative = 0, one_channel = 0,
                                          square = 0, indirect = 0, magnified = 0, atlas_texels = 0,
-                                         tinted = 0;
+                                         tinted = 0, two_channel = 0;
   static_assert(pack::kMaxPatchLevel == 3, "by_level below lists four levels");
   uint64_t by_level[pack::kMaxPatchLevel + 1] = {};
   for (uint32_t i = 0; i < p.patch_count(); ++i) {
@@ -131,6 +131,7 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                     pack::patch_atlas_side(r.height, level) * r.channel_count;
     negative += (r.flags & pack::kFlagNegative) ? 1 : 0;
     one_channel += r.channel_count == 1 ? 1 : 0;
+    two_channel += r.channel_count == 2 ? 1 : 0;
     tinted += pack::patch_has_tint(r) ? 1 : 0;
     square += r.encoding == pack::kEncodingSquare ? 1 : 0;
     indirect += r.target == pack::kTargetIndirectMap ? 1 : 0;
@@ -145,8 +146,11 @@ nlohmann::ordered_json describe(const PackView& p, const std::string& path) {
                   {"static_shadow", by_kind[4]},
                   {"negative", negative},
                   {"one_channel", one_channel},
-                  {"three_channel", p.patch_count() - one_channel},
-                  // Patches with a tint other than 255, 255, 255 (PatchRecord::tint).
+                  // Two tinted channels (PatchRecord::tint_b).
+                  {"two_channel", two_channel},
+                  {"three_channel", p.patch_count() - one_channel - two_channel},
+                  // Patches with a tint other than 255, 255, 255 (PatchRecord::tint), and every
+                  // 2-channel patch.
                   {"tinted", tinted},
                   {"square_encoded", square},
                   {"indirect_map", indirect},
@@ -319,16 +323,17 @@ int verb_info(Args& args) {
   std::printf("groups         %u\n", pack.view.group_count());
   std::printf(
       "patches        %u (base %llu, contribution %llu, shadow %llu, pair correction %llu, "
-      "static shadow %llu; negative %llu, 1-channel %llu, tinted %llu, square-encoded %llu, "
+      "static shadow %llu; negative %llu, 1-channel %llu, 2-channel %llu, tinted %llu, "
+      "square-encoded %llu, "
       "magnified %llu: level 1 %llu, 2 %llu, 3 %llu)\n",
       pack.view.patch_count(), pt["base"].get<unsigned long long>(),
       pt["contribution"].get<unsigned long long>(), pt["shadow"].get<unsigned long long>(),
       pt["pair_correction"].get<unsigned long long>(),
       pt["static_shadow"].get<unsigned long long>(), pt["negative"].get<unsigned long long>(),
-      pt["one_channel"].get<unsigned long long>(), pt["tinted"].get<unsigned long long>(),
-      pt["square_encoded"].get<unsigned long long>(), pt["magnified"].get<unsigned long long>(),
-      pt["by_level"][1].get<unsigned long long>(), pt["by_level"][2].get<unsigned long long>(),
-      pt["by_level"][3].get<unsigned long long>());
+      pt["one_channel"].get<unsigned long long>(), pt["two_channel"].get<unsigned long long>(),
+      pt["tinted"].get<unsigned long long>(), pt["square_encoded"].get<unsigned long long>(),
+      pt["magnified"].get<unsigned long long>(), pt["by_level"][1].get<unsigned long long>(),
+      pt["by_level"][2].get<unsigned long long>(), pt["by_level"][3].get<unsigned long long>());
   std::printf("atlases        %u:", pack.view.atlas_count());
   for (uint32_t i = 0; i < pack.view.atlas_count(); ++i) {
     std::printf(" %ux%u", pack.view.atlas(i).width, pack.view.atlas(i).height);

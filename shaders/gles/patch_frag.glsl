@@ -11,7 +11,7 @@ in vec2 v_atlas;
 flat in vec4 v_mask_r;
 flat in vec4 v_mask_g;
 flat in vec4 v_mask_b;
-flat in vec3 v_scale;  // scale * sign * tint, per map channel
+flat in vec3 v_scale;  // scale * sign (* tint, but for a 2-channel patch), per map channel
 flat in int v_square;
 flat in int v_unit;
 
@@ -30,7 +30,8 @@ void main() {
   else if (v_unit == 5) q = texelFetch(u_atlas[5], t, 0);
   else if (v_unit == 6) q = texelFetch(u_atlas[6], t, 0);
   else q = texelFetch(u_atlas[7], t, 0);
+  // Decoded before the masks combine channels (a 2-channel patch's masks blend two).
+  if (v_square == 1) q *= q;
   vec3 x = vec3(dot(q, v_mask_r), dot(q, v_mask_g), dot(q, v_mask_b));
-  if (v_square == 1) x *= x;
   o_color = vec4(x * (v_scale * u_factor), 0.0);
 }

@@ -18,7 +18,7 @@ in vec2 v_atlas;
 flat in vec4 v_mask_r;
 flat in vec4 v_mask_g;
 flat in vec4 v_mask_b;
-flat in vec3 v_scale;  // scale * sign * tint, per map channel
+flat in vec3 v_scale;  // scale * sign (* tint, but for a 2-channel patch), per map channel
 flat in int v_square;
 flat in vec4 v_rect;
 
@@ -31,9 +31,9 @@ vec4 fetch(ivec2 t) {
 // The decoded value of atlas texel t, before scale and sign.
 vec3 decode(ivec2 t) {
   vec4 q = fetch(t);
-  vec3 x = vec3(dot(q, v_mask_r), dot(q, v_mask_g), dot(q, v_mask_b));
-  if (v_square == 1) x *= x;
-  return x;
+  // Decoded before the masks combine channels (a 2-channel patch's masks blend two).
+  if (v_square == 1) q *= q;
+  return vec3(dot(q, v_mask_r), dot(q, v_mask_g), dot(q, v_mask_b));
 }
 
 void main() {

@@ -10,7 +10,7 @@ precision highp int;
 layout(location = 0) in vec2 a_dest;    // target texel corner
 layout(location = 1) in vec2 a_atlas;   // atlas texel corner
 // x: scale * sign (shadow groups and kFlagNegative patches are negative), y: first channel,
-// z: channel count (1 or 3), or 4 + d for a 1-channel patch drawn into map channel d only
+// z: channel count (1, 2 or 3), or 4 + d for a 1-channel patch drawn into map channel d only
 // (pack_format.h: kFlagDestinationMask), w: encoding (0 linear, 1 square)
 layout(location = 2) in vec4 a_patch;
 layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0..7)
@@ -18,6 +18,7 @@ layout(location = 3) in float a_unit;   // texture unit of the patch's atlas (0.
 // bilinear taps are clamped to it: a patch never reads a neighbour's texels).
 layout(location = 4) in vec4 a_rect;
 layout(location = 5) in vec3 a_tint;    // the patch's tint per map channel (tint / 255)
+layout(location = 6) in vec3 a_tint_b;  // a 2-channel patch's second tint (tint_b / 255)
 
 uniform vec2 u_target_size;
 
@@ -25,7 +26,9 @@ out vec2 v_atlas;
 flat out vec4 v_mask_r;
 flat out vec4 v_mask_g;
 flat out vec4 v_mask_b;
-flat out vec3 v_scale;  // scale * sign * tint, per map channel
+// scale * sign * tint per map channel; scale * sign for a 2-channel patch, whose masks carry its
+// two tints (map channel c = tint[c] * first channel + tint_b[c] * second)
+flat out vec3 v_scale;
 flat out int v_square;
 flat out int v_unit;
 flat out vec4 v_rect;
@@ -40,13 +43,18 @@ void main() {
     v_mask_r = d < 0.5 ? m : vec4(0.0);
     v_mask_g = d > 0.5 && d < 1.5 ? m : vec4(0.0);
     v_mask_b = d > 1.5 ? m : vec4(0.0);
+  } else if (a_patch.z > 1.5 && a_patch.z < 2.5) {  // two tinted channels
+    vec4 m0 = channel_mask(a_patch.y), m1 = channel_mask(a_patch.y + 1.0);
+    v_mask_r = m0 * a_tint.r + m1 * a_tint_b.r;
+    v_mask_g = m0 * a_tint.g + m1 * a_tint_b.g;
+    v_mask_b = m0 * a_tint.b + m1 * a_tint_b.b;
   } else {
-    float step = a_patch.z > 1.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
+    float step = a_patch.z > 2.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
     v_mask_r = channel_mask(a_patch.y);
     v_mask_g = channel_mask(a_patch.y + step);
     v_mask_b = channel_mask(a_patch.y + 2.0 * step);
   }
-  v_scale = a_patch.x * a_tint;
+  v_scale = a_patch.z > 1.5 && a_patch.z < 2.5 ? vec3(a_patch.x) : a_patch.x * a_tint;
   v_square = a_patch.w > 0.5 ? 1 : 0;
   v_unit = int(a_unit + 0.5);
   v_rect = a_rect;

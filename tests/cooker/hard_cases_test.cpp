@@ -808,29 +808,34 @@ TEST(HardCases, LightMapPatchLevelsSaveBytesAndRecomposeLikeBakeState) {
   }
 }
 
-// Pieces whose light has one colour stored as 1 channel and a tint (PackOptions::tint_pieces):
-// in the two rooms, whose walls tint the bounce light (the second room is lit by bounce alone),
-// fewer atlas bytes than the pack that keeps them in 3 channels, and the same light within the
-// tint's bound (a quarter of an output step) and the 8-bit codes at every valid texel, in every
-// standard state; both within the pack's bar of bake_state.
+// Pieces whose light has one colour stored as 1 channel and a tint, and those of two colours as 2
+// channels and two tints (PackOptions::tint_pieces): in the two rooms, whose walls tint the bounce
+// light (the second room is lit by bounce alone), fewer atlas bytes than the pack that keeps them
+// in 3 channels, and the same light within the tints' bound (a quarter of an output step) and the
+// 8-bit codes at every valid texel, in every standard state; both within the pack's bar of
+// bake_state.
 TEST(HardCases, PatchesWithATintSaveBytesAndRecomposeLikeThreeChannels) {
   Cooked colour, tinted;
   two_rooms(colour.scene);
   two_rooms(tinted.scene);
-  PackOptions po;
+  // Patches at level 0: the colour decision weighs the cuts where patches take levels, so only
+  // without levels are both packs cut alike and compared like for like.
+  PackOptions po, pt;
   po.tint_pieces = false;
+  po.max_patch_level = pt.max_patch_level = 0;
   cook(colour, 128, draft(true), po);
-  cook(tinted, 128, draft(true));
+  cook(tinted, 128, draft(true), pt);
   ASSERT_FALSE(HasFatalFailure());
   // Patches with a tint, and the atlas channel-texels the patches take (the atlases of so small
   // a pack round to the same size).
-  uint32_t with_tint[2] = {0, 0};
+  uint32_t with_tint[2] = {0, 0}, two_channels = 0;
   uint64_t channel_texels[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
     const PackView& v = k ? tinted.pack : colour.pack;
     for (uint32_t i = 0; i < v.patch_count(); ++i) {
       const pack::PatchRecord& p = v.patch(i);
       with_tint[k] += pack::patch_has_tint(p);
+      two_channels += k == 1 && p.channel_count == 2 ? 1 : 0;
       const uint32_t level = pack::patch_level(p.flags);
       channel_texels[k] += uint64_t(pack::patch_atlas_side(p.width, level)) *
                            pack::patch_atlas_side(p.height, level) * p.channel_count;
@@ -839,13 +844,14 @@ TEST(HardCases, PatchesWithATintSaveBytesAndRecomposeLikeThreeChannels) {
   const double ratio = double(channel_texels[1]) / double(channel_texels[0]);
   std::printf(
       "atlas channel-texels: 3 channels %llu, with tints %llu (%.3fx); atlas bytes %llu, %llu; "
-      "patches with a tint %u of %u\n",
+      "patches with a tint %u of %u (2-channel %u)\n",
       (unsigned long long)channel_texels[0], (unsigned long long)channel_texels[1], ratio,
       (unsigned long long)atlas_bytes(colour.pack), (unsigned long long)atlas_bytes(tinted.pack),
-      with_tint[1], tinted.pack.patch_count());
+      with_tint[1], tinted.pack.patch_count(), two_channels);
   EXPECT_EQ(with_tint[0], 0u);
   EXPECT_GT(with_tint[1], 0u);
-  EXPECT_LT(ratio, 0.98);  // 0.957x
+  EXPECT_GT(two_channels, 0u);
+  EXPECT_LT(ratio, 0.9);  // 0.813x (0.929x with 1 channel and a tint alone)
   EXPECT_LE(atlas_bytes(tinted.pack), atlas_bytes(colour.pack));
   expect_standard_states_match(colour);
   expect_standard_states_match(tinted);
@@ -856,9 +862,9 @@ TEST(HardCases, PatchesWithATintSaveBytesAndRecomposeLikeThreeChannels) {
         "  %-24s tints against 3 channels: relative RMSE %.4f%%, bias %+.4f%%, largest texel "
         "difference %.2f output steps beyond 1 %% of the texel\n",
         st.name.c_str(), 100.0 * d.rmse, 100.0 * d.bias, d.worst_steps);
-    EXPECT_LT(d.rmse, 0.002) << st.name;              // at most 0.08 %
-    EXPECT_LT(std::fabs(d.bias), 0.0005) << st.name;  // at most 0.009 %
-    EXPECT_LT(d.worst_steps, 1.0) << st.name;         // at most 0.10
+    EXPECT_LT(d.rmse, 0.002) << st.name;              // at most 0.060 %
+    EXPECT_LT(std::fabs(d.bias), 0.0005) << st.name;  // at most 0.0063 %
+    EXPECT_LT(d.worst_steps, 1.0) << st.name;         // at most 0.16
   }
 }
 

@@ -1,5 +1,6 @@
-// collapse_to_tint (patch_extract.h): a 3-channel patch whose light has one colour stored as one
-// channel and a tint (pack_format.h, PatchRecord::tint), within its tolerance at every texel.
+// collapse_to_tint and collapse_to_two_tints (patch_extract.h): a 3-channel patch whose light has
+// one colour stored as one channel and a tint, or two colours as two channels with a tint each
+// (pack_format.h, PatchRecord::tint and tint_b), within its tolerance at every texel.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -120,6 +121,86 @@ TEST(CollapseToTint, AZeroChannelStaysZero) {
   EXPECT_EQ(p.tint[1], 0);
   EXPECT_EQ(p.tint[2], 255);
   EXPECT_LE(worst(p, original), 1e-3);
+}
+
+// What the runtime adds for a 2-channel patch (value 0 times tint, value 1 times tint_b), against
+// the 3-channel original: the largest difference.
+double worst_two(const SourcePatch& two, const SourcePatch& original) {
+  double m = 0.0;
+  const size_t n = original.values.size() / 3;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double got = double(two.values[2 * i]) * (double(two.tint[c]) / 255.0) +
+                         double(two.values[2 * i + 1]) * (double(two.tint_b[c]) / 255.0);
+      m = std::max(m, std::fabs(got - double(original.values[3 * i + size_t(c)])));
+    }
+  return m;
+}
+
+// A warm light and its bounce off a blue wall, mixed in every proportion across the patch: no
+// one colour holds it, two do. It becomes 2 channels whose tints are the two colours (each
+// channel's largest 255), every texel within the tolerance, every value >= 0.
+TEST(CollapseToTwoTints, TwoColoursInAnyBlendBecomeTwoChannels) {
+  const std::array<float, 3> warm{1.0f, 0.6f, 0.2f}, blue{0.1f, 0.3f, 0.9f};
+  const SourcePatch original = coloured(12, 9, [&](int x, int y) {
+    const float a = float(x) / 11.0f, b = float(y) / 8.0f;
+    return std::array<float, 3>{a * warm[0] + b * blue[0], a * warm[1] + b * blue[1],
+                                a * warm[2] + b * blue[2]};
+  });
+  SourcePatch one = original;
+  ASSERT_FALSE(collapse_to_tint(one, 0.01f));
+  SourcePatch p = original;
+  const float tolerance = 0.01f;
+  ASSERT_TRUE(collapse_to_two_tints(p, tolerance));
+  EXPECT_EQ(p.channels, 2);
+  EXPECT_EQ(p.values.size(), original.values.size() / 3 * 2);
+  EXPECT_EQ(p.significant, original.significant);
+  EXPECT_LE(worst_two(p, original), tolerance);
+  for (float v : p.values) EXPECT_GE(v, 0.0f);
+  // The tints are the two colours, in either order.
+  const bool warm_first = p.tint[2] < p.tint_b[2];
+  const uint8_t* w = warm_first ? p.tint : p.tint_b;
+  const uint8_t* b = warm_first ? p.tint_b : p.tint;
+  EXPECT_EQ(w[0], 255);
+  EXPECT_NEAR(w[1], 153, 2);  // 0.6 * 255
+  EXPECT_NEAR(w[2], 51, 2);
+  EXPECT_NEAR(b[0], 28, 2);  // 0.1 / 0.9 * 255
+  EXPECT_NEAR(b[1], 85, 2);
+  EXPECT_EQ(b[2], 255);
+}
+
+// Three colours in one patch (three lights, or three albedos): no plane holds them, and the patch
+// is left as it was; a patch of one channel, or without light, too.
+TEST(CollapseToTwoTints, ThreeColoursAndOtherPatchesStayAsTheyWere) {
+  const SourcePatch original = coloured(12, 6, [](int x, int) {
+    return x < 4   ? std::array<float, 3>{1.0f, 0.0f, 0.0f}
+           : x < 8 ? std::array<float, 3>{0.0f, 1.0f, 0.0f}
+                   : std::array<float, 3>{0.0f, 0.0f, 1.0f};
+  });
+  SourcePatch p = original;
+  EXPECT_FALSE(collapse_to_two_tints(p, 0.01f));
+  EXPECT_EQ(p.channels, 3);
+  EXPECT_EQ(p.values, original.values);
+  SourcePatch dark = coloured(5, 5, [](int, int) { return std::array<float, 3>{0, 0, 0}; });
+  EXPECT_FALSE(collapse_to_two_tints(dark, 1e-3f));
+  SourcePatch grey = coloured(5, 5, [](int, int) { return std::array<float, 3>{1, 1, 1}; });
+  ASSERT_TRUE(collapse_to_tint(grey, 1e-4f));
+  EXPECT_FALSE(collapse_to_two_tints(grey, 1.0f));  // already one channel
+}
+
+// Two colours whose blend drifts out of their plane: the tolerance decides, and where the patch
+// collapses the bound holds at every texel.
+TEST(CollapseToTwoTints, TheToleranceDecides) {
+  const SourcePatch original = coloured(10, 10, [](int x, int y) {
+    const float a = float(x) / 9.0f, b = float(y) / 9.0f;
+    return std::array<float, 3>{a, 0.5f * a + 0.5f * b + 0.01f * float(x * y) / 81.0f, b};
+  });
+  SourcePatch loose = original;
+  ASSERT_TRUE(collapse_to_two_tints(loose, 0.05f));
+  EXPECT_LE(worst_two(loose, original), 0.05);
+  SourcePatch tight = original;
+  EXPECT_FALSE(collapse_to_two_tints(tight, 1e-4f));
+  EXPECT_EQ(tight.channels, 3);
 }
 
 }  // namespace

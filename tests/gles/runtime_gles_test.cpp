@@ -171,9 +171,10 @@ TEST_P(GlesPaths, RecomposeEqualsCpuReferenceForRandomStates) {
       o.max_patch = 6;
       o.patches_per_group = 12;
     }
-    if (seed >= 5) {  // magnified patches (levels 1 and 2) among level-0 ones, and tints
+    if (seed >= 5) {  // magnified patches (levels 1 and 2) among level-0 ones, tints, 2 channels
       o.magnified_probability = 0.5f;
       o.tinted_probability = 0.5f;
+      o.two_channel_probability = 0.5f;
       o.max_patch = 13;
       o.patches_per_group = 6;
     }
@@ -254,7 +255,8 @@ TEST_P(GlesExactPaths, IncrementalStatesMeetTheAccuracyBars) {
     o.objects = 4;
     o.indirect_scale = scale;
     o.magnified_probability = config.magnified;
-    o.tinted_probability = config.magnified;  // tints with the magnified patches
+    o.tinted_probability = config.magnified;       // tints with the magnified patches
+    o.two_channel_probability = config.magnified;  // and 2-channel patches
     open(o, GetParam());
     Error error;
     SceneState state;

@@ -86,6 +86,22 @@ TEST(AtlasPacker, GreyPatchesFillTheAlphaPlaneUnderRgbPatches) {
   for (size_t i = 4; i < 8; ++i) EXPECT_EQ(a.placements[i].channel, 0) << i;
 }
 
+TEST(AtlasPacker, TwoChannelPatchesPairUpAndLeaveTheAlphaPlaneToGreyOnes) {
+  // Four 8x8 patches of each channel count: the 2-channel ones pair up in channels 0-1 and 2-3
+  // of two rectangles, the 3-channel ones take channels 0-2 of four more, whose alpha plane the
+  // grey ones fill: 384 texels, no waste.
+  std::vector<PackItem> items = same(4, 8, 8, 1);
+  for (const PackItem& it : same(4, 8, 8, 2)) items.push_back(it);
+  for (const PackItem& it : same(4, 8, 8, 3)) items.push_back(it);
+  const AtlasLayout a = pack_atlases(items, 64);
+  ASSERT_EQ(a.atlases.size(), 1u);
+  EXPECT_EQ(atlas_texels(a), 384);
+  EXPECT_EQ(expect_disjoint(items, a, 64), 4 * atlas_texels(a));
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(a.placements[i].channel, 3) << i;
+  for (size_t i = 4; i < 8; ++i) EXPECT_EQ(a.placements[i].channel % 2, 0) << i;
+  for (size_t i = 8; i < 12; ++i) EXPECT_EQ(a.placements[i].channel, 0) << i;
+}
+
 TEST(AtlasPacker, TallestPatchGoesFirst) {
   const std::vector<PackItem> items = {{2, 2, 1}, {10, 3, 1}, {5, 5, 1}, {4, 4, 3}};
   const AtlasLayout a = pack_atlases(items, 64);
@@ -122,7 +138,8 @@ TEST(AtlasPacker, RandomItemsNeverOverlapAndWasteLittle) {
     std::vector<PackItem> items;
     int64_t rgb = 0, channel_texels = 0;
     for (int i = 0; i < 300; ++i) {
-      const PackItem it{1 + next(32), 1 + next(32), next(3) == 0 ? 3 : 1};
+      const int kind = next(4);  // a quarter 3-channel, a quarter 2-channel, half grey
+      const PackItem it{1 + next(32), 1 + next(32), kind == 0 ? 3 : kind == 1 ? 2 : 1};
       items.push_back(it);
       channel_texels += int64_t(it.width) * it.height * it.channels;
       if (it.channels == 3) rgb += int64_t(it.width) * it.height;
@@ -142,7 +159,8 @@ TEST(AtlasPacker, RejectsPatchesLargerThanTheMaximumAndBadMaxima) {
   EXPECT_NO_THROW(pack_atlases(same(1, 16, 16, 1), 16));
   EXPECT_THROW(pack_atlases(same(1, 17, 4, 1), 16), CookError);
   EXPECT_THROW(pack_atlases(same(1, 0, 4, 1), 16), CookError);
-  EXPECT_THROW(pack_atlases(same(1, 4, 4, 2), 16), CookError);
+  EXPECT_NO_THROW(pack_atlases(same(1, 4, 4, 2), 16));
+  EXPECT_THROW(pack_atlases(same(1, 4, 4, 4), 16), CookError);
   EXPECT_THROW(pack_atlases(same(1, 4, 4, 1), 12), CookError);  // below the minimum
   EXPECT_THROW(pack_atlases(same(1, 4, 4, 1), 18), CookError);  // not a multiple of 4
 }

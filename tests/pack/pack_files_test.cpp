@@ -1,4 +1,4 @@
-// The committed test packs stay true to the cooker; golden bytes of format version 6; hostile
+// The committed test packs stay true to the cooker; golden bytes of format version 7; hostile
 // packs (truncated, bytes flipped) are refused cleanly or stay safe to use (run under ASan).
 #include <gtest/gtest.h>
 
@@ -23,9 +23,9 @@ namespace {
 using test::Aligned;
 using test::fix_checksum;
 
-// Golden values of tiny.lpk (format version 6).
-constexpr uint64_t kTinySize = 1984;
-constexpr uint32_t kTinyCrc = 0xb6b47c69u;
+// Golden values of tiny.lpk (format version 7).
+constexpr uint64_t kTinySize = 2240;
+constexpr uint32_t kTinyCrc = 0xa40180b1u;
 
 std::string data_path(const std::string& name) {
   return std::string(LIGHTPATCH_TEST_DATA_DIR) + "/packs/" + name;
@@ -54,20 +54,22 @@ TEST(PackFiles, CommittedPacksMatchTheCooker) {
   check_committed("tiny.lpk", test::build_tiny_pack());
 }
 
-TEST(PackFiles, GoldenBytesOfVersion6) {
+TEST(PackFiles, GoldenBytesOfVersion7) {
   const std::vector<uint8_t> b = test::build_tiny_pack();
   ASSERT_GE(b.size(), 64u);
   EXPECT_EQ(std::memcmp(b.data(), "LPK1", 4), 0);
   uint32_t version;
   std::memcpy(&version, b.data() + 4, 4);
-  EXPECT_EQ(version, 6u);
+  EXPECT_EQ(version, 7u);
   uint64_t file_size;
   std::memcpy(&file_size, b.data() + 8, 8);
   EXPECT_EQ(file_size, b.size());
   // Field offsets pinned (also static_asserted in pack_format.h).
   EXPECT_EQ(offsetof(pack::PatchRecord, scale), 16u);
-  EXPECT_EQ(sizeof(pack::PatchRecord), 28u);  // version 6: the tint
+  EXPECT_EQ(sizeof(pack::PatchRecord), 32u);  // version 7: the second tint
   EXPECT_EQ(offsetof(pack::PatchRecord, tint), 24u);
+  EXPECT_EQ(offsetof(pack::PatchRecord, tint_b), 27u);
+  EXPECT_EQ(offsetof(pack::PatchRecord, reserved), 30u);
   EXPECT_EQ(offsetof(pack::Header, table_checksum), 20u);
   EXPECT_EQ(offsetof(pack::LightRecord, intensity), 20u);
   EXPECT_EQ(offsetof(pack::MeshRecord, object), 40u);
@@ -232,16 +234,19 @@ TEST(PackFiles, AtlasSidesAndVersionAreCheckedOnLoad) {
   EXPECT_NE(std::string(e.message).find("cook the scene again"), std::string::npos) << e.message;
   // Version 4 (before moving lights) likewise.
   EXPECT_EQ(open_edited(offsetof(pack::Header, version), 4u, &e), Status::kUnsupportedVersion);
-  EXPECT_NE(std::string(e.message).find("version 4 is not supported (this reader: 6); cook the "
+  EXPECT_NE(std::string(e.message).find("version 4 is not supported (this reader: 7); cook the "
                                         "scene again"),
             std::string::npos)
       << e.message;
-  // Version 5 (before the patches' tint) likewise.
-  EXPECT_EQ(open_edited(offsetof(pack::Header, version), 5u, &e), Status::kUnsupportedVersion);
-  EXPECT_NE(std::string(e.message).find("version 5 is not supported (this reader: 6); cook the "
-                                        "scene again"),
-            std::string::npos)
-      << e.message;
+  // Versions 5 (before the patches' tint) and 6 (before 2-channel patches) likewise.
+  for (uint32_t old : {5u, 6u}) {
+    EXPECT_EQ(open_edited(offsetof(pack::Header, version), old, &e), Status::kUnsupportedVersion);
+    EXPECT_NE(std::string(e.message).find("version " + std::to_string(old) +
+                                          " is not supported (this reader: 7); cook the "
+                                          "scene again"),
+              std::string::npos)
+        << e.message;
+  }
 }
 
 }  // namespace

@@ -61,9 +61,10 @@ void add_patch_bounds(const PackView& v, int32_t group, std::vector<double>& bou
   const pack::GroupRecord& g = v.group(uint32_t(group));
   for (uint32_t i = g.first_patch; i < g.first_patch + g.patch_count; ++i) {
     const pack::PatchRecord& p = v.patch(i);
+    // A 2-channel patch adds two codes' values, each times a tint of at most 1.
     const double e = double(p.scale) *
                      (p.encoding == pack::kEncodingSquare ? kSquareErrorBound : kLinearErrorBound) *
-                     1.0001;
+                     1.0001 * (p.channel_count == 2 ? 2.0 : 1.0);
     for (int y = p.dest_y; y < p.dest_y + p.height; ++y) {
       for (int x = p.dest_x; x < p.dest_x + p.width; ++x)
         bound[size_t(y) * v.lightmap_width() + x] += e;

@@ -73,9 +73,23 @@ TEST(MagnifiedPatches, TheAtlasRectangleIsCheckedWithTheAtlasSides) {
   SyntheticOptions o = small_atlas_options();
   o.mutate = [](pack::Header&, Patches& p) { p[0].flags = uint8_t(p[0].flags | 0x20u); };
   EXPECT_NE(open_message(make_synthetic_pack(o)).find("patch 0: unknown flags"), std::string::npos);
-  // The byte after the tint is reserved.
+  // The bytes after the second tint are reserved.
   o.mutate = [](pack::Header&, Patches& p) { p[1].reserved = 1; };
   EXPECT_NE(open_message(make_synthetic_pack(o)).find("patch 1: reserved field not zero"),
+            std::string::npos);
+  // A second tint only on a 2-channel patch; a 2-channel patch's channels within RGBA.
+  o.mutate = [](pack::Header&, Patches& p) {
+    p[0].channel_count = 1;
+    p[0].tint_b[1] = 7;
+  };
+  EXPECT_NE(open_message(make_synthetic_pack(o)).find("patch 0: a second tint on a 1-channel"),
+            std::string::npos);
+  o.mutate = [](pack::Header&, Patches& p) {
+    p[0].channel_count = 2;
+    p[0].channel = 3;
+    p[0].flags = uint8_t(p[0].flags & ~pack::kFlagDestinationMask);
+  };
+  EXPECT_NE(open_message(make_synthetic_pack(o)).find("patch 0: channels 3+2 exceed RGBA"),
             std::string::npos);
 }
 
@@ -90,6 +104,7 @@ SyntheticOptions magnified_options(uint32_t seed) {
   o.indirect_scale = 2;
   o.magnified_probability = 0.6f;
   o.tinted_probability = 0.4f;
+  o.two_channel_probability = 0.5f;
   return o;
 }
 
@@ -112,7 +127,8 @@ double rule_at(const PackView& pack, const pack::PatchRecord& p, uint32_t x, uin
   };
   const int x0 = clamp(int(ix), aw), x1 = clamp(int(ix) + 1, aw);
   const int y0 = clamp(int(iy), ah), y1 = clamp(int(iy) + 1, ah);
-  const int channel = p.channel + (p.channel_count == 3 ? c : 0);
+  // c: the map channel of a 3-channel patch, or a 2-channel patch's channel (0 or 1).
+  const int channel = p.channel + (p.channel_count >= 2 ? c : 0);
   const uint8_t* pixels = pack.atlas_pixels(p.atlas);
   const uint32_t stride = pack.atlas(p.atlas).width;
   auto value = [&](int tx, int ty) {
@@ -141,7 +157,12 @@ std::vector<double> rule_map(const PackView& pack, uint32_t i, const double fact
           map.data() + (pack.map_offset(p.target) + (size_t(p.dest_y) + y) * w + p.dest_x + x) * 3;
       for (int c = 0; c < 3; ++c) {
         if (destination >= 0 && c != destination) continue;
-        t[c] += factor[c] * (p.tint[c] / 255.0) * rule_at(pack, p, x, y, c, clamp_right, nearest);
+        if (p.channel_count == 2)  // two tints: each channel's value times its own
+          t[c] +=
+              factor[c] * ((p.tint[c] / 255.0) * rule_at(pack, p, x, y, 0, clamp_right, nearest) +
+                           (p.tint_b[c] / 255.0) * rule_at(pack, p, x, y, 1, clamp_right, nearest));
+        else
+          t[c] += factor[c] * (p.tint[c] / 255.0) * rule_at(pack, p, x, y, c, clamp_right, nearest);
       }
     }
   }
@@ -159,12 +180,13 @@ TEST(MagnifiedPatches, TheSyntheticPackHasMagnifiedPatchesOfEveryKind) {
   PackView pack;
   ASSERT_EQ(open_message(bytes, &pack), "");
   uint32_t level[4] = {}, odd = 0, even = 0, rgb = 0, grey = 0, single = 0, square = 0, linear = 0,
-           negative = 0, subtracted = 0, indirect = 0, light_map = 0, tinted = 0;
+           negative = 0, subtracted = 0, indirect = 0, light_map = 0, tinted = 0, two[2] = {};
   for (uint32_t i = 0; i < pack.patch_count(); ++i) {
     const pack::PatchRecord& p = pack.patch(i);
     const uint32_t l = pack::patch_level(p.flags);
     ++level[l];
     tinted += pack::patch_has_tint(p);
+    if (p.channel_count == 2) ++two[l > 0];
     if (l == 0) continue;
     ++((p.width % 2) ? odd : even);
     ++((p.height % 2) ? odd : even);
@@ -178,7 +200,7 @@ TEST(MagnifiedPatches, TheSyntheticPackHasMagnifiedPatchesOfEveryKind) {
   EXPECT_GT(level[1], 0u);
   EXPECT_GT(level[2], 0u);
   for (uint32_t n : {odd, even, rgb, grey, single, square, linear, negative, subtracted, indirect,
-                     light_map, tinted})
+                     light_map, tinted, two[0], two[1]})
     EXPECT_GT(n, 0u);
 }
 
@@ -303,10 +325,10 @@ TEST(MagnifiedPatches, AMagnifiedPatchNeverReadsItsAtlasNeighbours) {
   EXPECT_GT(unclamped_gap, 0.05) << "no patch's unclamped taps reach a neighbour";
 }
 
-// Golden values of magnified.lpk (format version 6 with patches at levels 1 and 2 and tints; a
+// Golden values of magnified.lpk (format version 7 with patches at levels 1 and 2 and tints; a
 // pack_load fuzz seed too: tests/fuzz/corpus/pack_load/).
-constexpr uint64_t kMagnifiedSize = 37120;
-constexpr uint32_t kMagnifiedCrc = 0xcedb5aacu;
+constexpr uint64_t kMagnifiedSize = 37376;
+constexpr uint32_t kMagnifiedCrc = 0x09c97d4fu;
 
 TEST(MagnifiedPatches, GoldenBytesAndEveryTruncationRefused) {
   const SyntheticPack built = make_synthetic_pack(magnified_options(3));

@@ -70,9 +70,9 @@ TEST(ProbeValidation, APackWithProbesOpensAndShowsThem) {
   EXPECT_EQ(plain.probe_bytes(), 0u);
 }
 
-// Golden values of probes.lpk (format version 6 with light probes, a grid and named probes).
+// Golden values of probes.lpk (format version 7 with light probes, a grid and named probes).
 constexpr uint64_t kProbesSize = 30720;
-constexpr uint32_t kProbesCrc = 0xcbffb495u;
+constexpr uint32_t kProbesCrc = 0x78811239u;
 
 // Keeps the committed pack byte-equal to what the builder writes (committed_pack.h).
 TEST(ProbeValidation, GoldenBytesOfAPackWithProbes) {

@@ -42,6 +42,9 @@ struct SyntheticOptions {
   // Tints (PatchRecord::tint): each patch gets a random tint (any bytes) with this probability,
   // else 255, 255, 255, from a random stream of its own: the rest of the pack is the same.
   float tinted_probability = 0.0f;
+  // Of the tinted patches with one channel and no destination channel, those that become 2-channel
+  // patches (a second random tint, PatchRecord::tint_b), from the tints' stream.
+  float two_channel_probability = 0.0f;
   // Edits the header and the patch records (not their count) before the table checksum is
   // computed: corrupt packs that only the record validation can refuse.
   std::function<void(pack::Header&, std::vector<pack::PatchRecord>&)> mutate;
@@ -307,9 +310,18 @@ inline SyntheticPack make_synthetic_pack(const SyntheticOptions& o) {
       p.flags = uint8_t(p.flags | (level << kFlagLevelShift));
       p.tint[0] = p.tint[1] = p.tint[2] = 255;
       if (o.tinted_probability > 0.0f &&
-          std::uniform_real_distribution<float>(0.0f, 1.0f)(tint_rng) < o.tinted_probability)
+          std::uniform_real_distribution<float>(0.0f, 1.0f)(tint_rng) < o.tinted_probability) {
         for (uint8_t& t : p.tint)
           t = uint8_t(std::uniform_int_distribution<uint32_t>(0, 255)(tint_rng));
+        if (p.channel_count == 1 && patch_destination(p.flags) < 0 &&
+            std::uniform_real_distribution<float>(0.0f, 1.0f)(tint_rng) <
+                o.two_channel_probability) {
+          p.channel_count = 2;
+          p.channel = uint8_t(std::min<uint32_t>(p.channel, 2));
+          for (uint8_t& t : p.tint_b)
+            t = uint8_t(std::uniform_int_distribution<uint32_t>(0, 255)(tint_rng));
+        }
+      }
       p.group = uint16_t(g);
       patches.push_back(p);
     }

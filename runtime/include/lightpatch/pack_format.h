@@ -1,4 +1,4 @@
-// lightpatch pack format, version 6: the one definition shared by the cooker's writer and the
+// lightpatch pack format, version 7: the one definition shared by the cooker's writer and the
 // runtime's reader.
 //
 // A pack is one little-endian file, usable straight from a read-only memory mapping:
@@ -40,7 +40,10 @@
 // to all three (grey) or to the one channel its flags name (patch_destination()). Each value
 // added to map channel c is first multiplied by the patch's tint, PatchRecord::tint[c] / 255
 // (255 for all three: no tint), so that a 1-channel patch can carry light of one colour
-// (bounce light tinted by an albedo) that would otherwise take three channels.
+// (bounce light tinted by an albedo) that would otherwise take three channels. A 2-channel patch
+// (channels `channel` and `channel` + 1) carries light of two colours: it adds
+// v0 * tint[c] / 255 + v1 * tint_b[c] / 255 to map channel c (two lights' colours, or one
+// light's direct light and its bounce off a coloured wall, in one quad).
 // Values are irradiance in the lights' units (W/m^2-like "lux" for intensity 1 of the owning
 // light for contribution/shadow/correction patches; absolute for base patches).
 //
@@ -110,9 +113,10 @@ constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 
 // Version 4: light probes (sections 10-13). Version 5: moving lights and their panes (sections
 // 14-15, LightRecord::flags, kLightPane); later in version 5, magnified patches (PatchFlags
 // kFlagLevelMask), which a reader built before them refuses as unknown patch flags. Version 6:
-// PatchRecord grew to 28 bytes with a per-patch tint. A reader accepts its own version only (a
+// PatchRecord grew to 28 bytes with a per-patch tint. Version 7: 2-channel patches with a second
+// tint (PatchRecord::tint_b; records of 32 bytes). A reader accepts its own version only (a
 // pack of another version is refused with a message to cook it again).
-constexpr uint32_t kVersion = 6;
+constexpr uint32_t kVersion = 7;
 constexpr uint32_t kSectionAlignment = 256;
 constexpr uint16_t kNone16 = 0xFFFFu;  // "no light" / "no object" in 16-bit owner fields
 constexpr uint32_t kMaxAtlasSize = 16384;
@@ -297,28 +301,34 @@ struct PatchRecord {
   uint16_t dest_x, dest_y;    // top-left texel in the target map
   uint8_t atlas;              // atlas index
   uint8_t channel;            // first atlas channel (0=R .. 3=A)
-  uint8_t channel_count;  // 1 (grey, or one map channel: PatchFlags) or 3 (RGB from channel..+2)
-  uint8_t encoding;       // PatchEncoding
-  float scale;            // finite, > 0
-  uint8_t flags;          // PatchFlags
-  uint8_t target;         // PatchTarget
-  uint16_t group;         // index of the owning GroupRecord (redundant, validated)
+  // 1 (grey, or one map channel: PatchFlags), 2 (two tints, channel..+1, channel <= 2) or 3 (RGB
+  // from channel..+2)
+  uint8_t channel_count;
+  uint8_t encoding;  // PatchEncoding
+  float scale;       // finite, > 0
+  uint8_t flags;     // PatchFlags
+  uint8_t target;    // PatchTarget
+  uint16_t group;    // index of the owning GroupRecord (redundant, validated)
   // Per map channel R, G, B: the value added to channel c is multiplied by tint[c] / 255
   // ("Decoding a patch texel"). 255, 255, 255 for a patch without a tint.
   uint8_t tint[3];
-  uint8_t reserved;  // 0
+  // A 2-channel patch's second value's tint, as `tint` for its first; 0, 0, 0 for other patches.
+  uint8_t tint_b[3];
+  uint16_t reserved;  // 0
 };
-static_assert(sizeof(PatchRecord) == 28);
+static_assert(sizeof(PatchRecord) == 32);
 static_assert(offsetof(PatchRecord, dest_x) == 8);
 static_assert(offsetof(PatchRecord, atlas) == 12);
 static_assert(offsetof(PatchRecord, scale) == 16);
 static_assert(offsetof(PatchRecord, flags) == 20);
 static_assert(offsetof(PatchRecord, group) == 22);
 static_assert(offsetof(PatchRecord, tint) == 24);
+static_assert(offsetof(PatchRecord, tint_b) == 27);
+static_assert(offsetof(PatchRecord, reserved) == 30);
 
 // Whether a patch carries a tint (a factor other than 1 on some map channel).
 constexpr bool patch_has_tint(const PatchRecord& p) {
-  return p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255;
+  return p.channel_count == 2 || p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255;
 }
 
 // An atlas: any size whose sides are multiples of kAtlasAlign (GLES 3.0 textures need not be

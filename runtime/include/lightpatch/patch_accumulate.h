@@ -49,7 +49,7 @@ T magnify_blend(T a, T b, T c, T d, T tx, T ty) {
 template <typename T>
 void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8_t* pixels,
                          uint32_t atlas_width, const T table[256], const T f[3], uint32_t step,
-                         int destination, T* map, uint32_t map_width) {
+                         int destination, T* map, uint32_t map_width, const T* f_b = nullptr) {
   const uint32_t aw = pack::patch_atlas_side(p.width, level);
   const uint32_t ah = pack::patch_atlas_side(p.height, level);
   // The patch's first channel at atlas-rectangle texel (x, y).
@@ -73,6 +73,11 @@ void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8
       const T v0 = lerp2(a, b, c, d, 0, tx.t, ty.t);
       if (destination >= 0) {
         dst[destination] += f[destination] * v0;
+      } else if (f_b) {  // two tints: the second channel's value times the second tint
+        const T v1 = lerp2(a, b, c, d, 1, tx.t, ty.t);
+        dst[0] += f[0] * v0 + f_b[0] * v1;
+        dst[1] += f[1] * v0 + f_b[1] * v1;
+        dst[2] += f[2] * v0 + f_b[2] * v1;
       } else if (step == 0) {  // grey: one value for the three channels
         dst[0] += f[0] * v0;
         dst[1] += f[1] * v0;
@@ -91,7 +96,8 @@ void add_magnified_patch(const pack::PatchRecord& p, uint32_t level, const uint8
 // one; RGB, 3 values per texel, row 0 = top), each patch into its own target. With `absolute`,
 // adds |factor * value| (magnitude bounds). A grey patch (one channel) adds its value to all three
 // channels, or to its one destination channel (pack::patch_destination); every value added to map
-// channel c is multiplied by the patch's tint (patch_tint). The patches must be
+// channel c is multiplied by the patch's tint (patch_tint); a 2-channel patch adds its
+// first value times its tint and its second times tint_b (patch_tint_b). The patches must be
 // valid indices of a validated pack. A magnified patch (level > 0) is interpolated from its
 // atlas rectangle; with `absolute`, from the absolute values (a bound of the magnitude).
 template <typename T>
@@ -111,14 +117,32 @@ void add_patches(const PackView& pack, uint32_t first, uint32_t count, const T f
       table[q] = absolute ? T(std::fabs(v)) : v;
     }
     // The patch's tint is a factor on each map channel ("Decoding a patch texel").
-    T f[3];
-    for (int c = 0; c < 3; ++c)
-      f[c] = (absolute ? T(std::fabs(factor[c])) : factor[c]) * patch_tint<T>(p, c);
+    T f[3], f_b[3];
+    for (int c = 0; c < 3; ++c) {
+      const T k = absolute ? T(std::fabs(factor[c])) : factor[c];
+      f[c] = k * patch_tint<T>(p, c);
+      f_b[c] = k * patch_tint_b<T>(p, c);
+    }
+    const bool two = p.channel_count == 2;
     const uint32_t step = p.channel_count == 3 ? 1 : 0;
     const int destination = pack::patch_destination(p.flags);
     const uint32_t level = pack::patch_level(p.flags);
     if (level > 0) {
-      add_magnified_patch(p, level, pixels, aw, table, f, step, destination, map, w);
+      add_magnified_patch(p, level, pixels, aw, table, f, step, destination, map, w,
+                          two ? f_b : nullptr);
+      continue;
+    }
+    if (two) {
+      for (uint32_t y = 0; y < p.height; ++y) {
+        const uint8_t* src = pixels + ((size_t(p.atlas_y) + y) * aw + p.atlas_x) * 4 + p.channel;
+        T* dst = map + ((size_t(p.dest_y) + y) * w + p.dest_x) * 3;
+        for (uint32_t x = 0; x < p.width; ++x, src += 4, dst += 3) {
+          const T v0 = table[src[0]], v1 = table[src[1]];
+          dst[0] += f[0] * v0 + f_b[0] * v1;
+          dst[1] += f[1] * v0 + f_b[1] * v1;
+          dst[2] += f[2] * v0 + f_b[2] * v1;
+        }
+      }
       continue;
     }
     if (destination >= 0) {

@@ -27,6 +27,12 @@ inline T patch_tint(const pack::PatchRecord& patch, int c) {
   return T(patch.tint[c]) / T(255);
 }
 
+// The factor of a 2-channel patch's second tint on map channel c: tint_b[c] / 255.
+template <typename T>
+inline T patch_tint_b(const pack::PatchRecord& patch, int c) {
+  return T(patch.tint_b[c]) / T(255);
+}
+
 // Worst-case absolute decoding error of a texel, in units of the patch scale, when the encoder
 // rounds to the nearest code: linear 1/510 (half a step of 1/255); square: s * |x^2 - x'^2| with
 // |x - x'| <= 1/510 and x + x' <= 2, i.e. 1/255. Float rounding adds a few ulps of the scale.

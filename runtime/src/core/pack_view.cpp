@@ -864,8 +864,8 @@ Status Validator::run(Parsed* out) {
       return fail(Status::kCorrupt, "patch %u: destination rectangle %u+%u exceeds %s height %u", i,
                   p.dest_y, p.height, map, map_h);
     }
-    if (p.channel_count != 1 && p.channel_count != 3) {
-      return fail(Status::kCorrupt, "patch %u: channel count %u (must be 1 or 3)", i,
+    if (p.channel_count < 1 || p.channel_count > 3) {
+      return fail(Status::kCorrupt, "patch %u: channel count %u (must be 1, 2 or 3)", i,
                   p.channel_count);
     }
     if (uint32_t(p.channel) + p.channel_count > 4) {
@@ -883,6 +883,10 @@ Status Validator::run(Parsed* out) {
     }
     if (patch_destination(p.flags) >= 0 && p.channel_count != 1) {
       return fail(Status::kCorrupt, "patch %u: a destination channel on a %u-channel patch", i,
+                  p.channel_count);
+    }
+    if (p.channel_count != 2 && (p.tint_b[0] != 0 || p.tint_b[1] != 0 || p.tint_b[2] != 0)) {
+      return fail(Status::kCorrupt, "patch %u: a second tint on a %u-channel patch", i,
                   p.channel_count);
     }
     if (p.reserved != 0) return fail(Status::kCorrupt, "patch %u: reserved field not zero", i);

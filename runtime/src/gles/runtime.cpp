@@ -21,8 +21,8 @@ namespace {
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
 constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
 // dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4 (magnified patches only),
-// tint 3.
-constexpr uint32_t kFloatsPerVertex = 16;
+// tint 3, second tint 3 (2-channel patches).
+constexpr uint32_t kFloatsPerVertex = 19;
 constexpr uint32_t kVertexBytes = kFloatsPerVertex * sizeof(float);
 // The scale is chosen so that the authored state's bound stays below this (16x headroom below
 // the largest half float).
@@ -489,7 +489,7 @@ Status Runtime::create_buffers(Error* error) {
     return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
   }
   for (uint32_t q = 0; q < quads; ++q) {
-    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4], tint[3];
+    float dx0, dy0, dx1, dy1, ax0, ay0, ax1, ay1, params[4], unit, rect[4], tint[6];
     if (q < pack_.patch_count()) {
       const pack::PatchRecord& p = pack_.patch(q);
       // The destination and the atlas rectangle are given separately: a patch drawn magnified
@@ -511,7 +511,10 @@ Status Runtime::create_buffers(Error* error) {
       params[2] = destination >= 0 ? 4.0f + float(destination) : float(p.channel_count);
       params[3] = p.encoding == pack::kEncodingSquare ? 1.0f : 0.0f;
       unit = float(p.atlas % kUnits);
-      for (int c = 0; c < 3; ++c) tint[c] = patch_tint<float>(p, c);
+      for (int c = 0; c < 3; ++c) {
+        tint[c] = patch_tint<float>(p, c);
+        tint[3 + c] = patch_tint_b<float>(p, c);
+      }
     } else {  // a full-target quad, sampling atlas 0 stretched over it (fill-rate floor)
       const pack::AtlasRecord& a0 = pack_.atlas(0);
       const uint8_t target =
@@ -522,6 +525,7 @@ Status Runtime::create_buffers(Error* error) {
       unit = 0.0f;
       rect[0] = rect[1] = 0.0f, rect[2] = ax1 - 1.0f, rect[3] = ay1 - 1.0f;
       tint[0] = tint[1] = tint[2] = 1.0f;
+      tint[3] = tint[4] = tint[5] = 0.0f;
     }
     const float corners[4][4] = {
         {dx0, dy0, ax0, ay0}, {dx1, dy0, ax1, ay0}, {dx0, dy1, ax0, ay1}, {dx1, dy1, ax1, ay1}};
@@ -564,6 +568,9 @@ Status Runtime::create_buffers(Error* error) {
   glEnableVertexAttribArray(5);
   glVertexAttribPointer(5, 3, GL_FLOAT, GL_FALSE, kVertexBytes,
                         reinterpret_cast<const void*>(13 * sizeof(float)));
+  glEnableVertexAttribArray(6);
+  glVertexAttribPointer(6, 3, GL_FLOAT, GL_FALSE, kVertexBytes,
+                        reinterpret_cast<const void*>(16 * sizeof(float)));
   glBindVertexArray(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   memory_.vertex_buffer = vbytes;
