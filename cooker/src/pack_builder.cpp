@@ -693,7 +693,15 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
                 tiles.push_back(std::move(f));
               }
             }
-            if (!tiles.empty() && split_bytes < piece_bytes(p)) return tiles;
+            // Cut where the tiles cost less counted either way: after their colour decision
+            // (tiles of one or two colours where the whole mixes more), or in the channels they
+            // have now (the cost the levels' tiles were tuned with: each quad's overhead weighs
+            // against three channels' bytes). Either alone took more atlas bytes (README,
+            // "Patches of two colours").
+            uint64_t plain_bytes = 0;
+            for (const SourcePatch& t : tiles) plain_bytes += patch_bytes(t);
+            if (!tiles.empty() && (split_bytes < piece_bytes(p) || plain_bytes < patch_bytes(p)))
+              return tiles;
           }
           one.push_back(std::move(p));
           return one;
