@@ -1,8 +1,8 @@
 // Packing patches into the channels of RGBA8 atlases (thesis §4.1.5, without its power-of-two
-// sizes and gutters): patches sorted by channel count, then height, then width, descending; a
-// 3-channel patch takes channels 0-2 of one rectangle, a 2-channel patch the lowest place of two
-// neighbouring channels (0-1, 1-2 or 2-3), a 1-channel patch the lowest place of any channel (so
-// grey patches fill the alpha plane under tinted ones before they raise the atlas);
+// sizes and gutters): patches sorted by channel count (2, then 3, then 1), then height, then
+// width, descending; a 2-channel patch takes the lowest place of channels 0-1 or 2-3 (so they pair
+// up), a 3-channel patch channels 0-2 of one rectangle, a 1-channel patch the lowest place of any
+// channel (so grey patches fill the alpha plane under tinted ones before they raise the atlas);
 // each at the lowest, then leftmost, place of its channels' skylines. Atlas sides are multiples of
 // pack::kAtlasAlign up to the maximum size: while the patches left need more than one atlas of
 // the maximum size, the atlas is that size (what does not fit waits for the next); the last one

@@ -620,9 +620,6 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       const FloatImage* scale = nullptr;
     };
     const CutRule whole{j.threshold};
-    // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
-    // so a patch keeps three channels only where the tint shows above the 8-bit step (B is
-    // always 3: authored colours).
     // A piece's colours (the last step of a cut, below): one tint, else two, else three
     // channels; returns the channels it keeps.
     const bool tint_pieces = !options.keep_colour && options.tint_pieces;
@@ -632,6 +629,9 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       if (collapse_to_two_tints(p, tolerance)) return 2;
       return 3;
     };
+    // Cuts one map into patches; bounce tints C_l and S_ol, a light's colour is a run-time factor,
+    // so a patch keeps three channels only where the tint shows above the 8-bit step (B is
+    // always 3: authored colours).
     auto cut = [&](const FloatImage& map, const std::vector<Region>& regions, uint8_t target,
                    std::vector<SourcePatch>& out, ColourDecision& d, const CutRule& rule) {
       const size_t first = out.size();

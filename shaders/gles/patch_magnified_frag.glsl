@@ -18,7 +18,7 @@ in vec2 v_atlas;
 flat in vec4 v_mask_r;
 flat in vec4 v_mask_g;
 flat in vec4 v_mask_b;
-flat in vec3 v_scale;  // scale * sign (* tint, but for a 2-channel patch), per map channel
+flat in float v_scale;  // scale * sign (the masks carry the tints)
 flat in int v_square;
 flat in vec4 v_rect;
 

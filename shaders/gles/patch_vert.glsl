@@ -26,9 +26,8 @@ out vec2 v_atlas;
 flat out vec4 v_mask_r;
 flat out vec4 v_mask_g;
 flat out vec4 v_mask_b;
-// scale * sign * tint per map channel; scale * sign for a 2-channel patch, whose masks carry its
-// two tints (map channel c = tint[c] * first channel + tint_b[c] * second)
-flat out vec3 v_scale;
+// Map channel c = dot(decoded texel, v_mask_c) * v_scale: the masks carry the tints.
+flat out float v_scale;  // scale * sign
 flat out int v_square;
 flat out int v_unit;
 flat out vec4 v_rect;
@@ -37,24 +36,24 @@ vec4 channel_mask(float c) { return vec4(equal(vec4(c), vec4(0.0, 1.0, 2.0, 3.0)
 
 void main() {
   v_atlas = a_atlas;
+  // Each map channel's first atlas channel: the patch's first for a grey or 2-channel patch.
+  vec4 m0 = channel_mask(a_patch.y), m1 = channel_mask(a_patch.y + 1.0);
+  vec4 r = m0, g = m0, b = m0;
   if (a_patch.z > 3.5) {  // one map channel: the others get a zero mask
-    vec4 m = channel_mask(a_patch.y);
     float d = a_patch.z - 4.0;
-    v_mask_r = d < 0.5 ? m : vec4(0.0);
-    v_mask_g = d > 0.5 && d < 1.5 ? m : vec4(0.0);
-    v_mask_b = d > 1.5 ? m : vec4(0.0);
-  } else if (a_patch.z > 1.5 && a_patch.z < 2.5) {  // two tinted channels
-    vec4 m0 = channel_mask(a_patch.y), m1 = channel_mask(a_patch.y + 1.0);
-    v_mask_r = m0 * a_tint.r + m1 * a_tint_b.r;
-    v_mask_g = m0 * a_tint.g + m1 * a_tint_b.g;
-    v_mask_b = m0 * a_tint.b + m1 * a_tint_b.b;
-  } else {
-    float step = a_patch.z > 2.5 ? 1.0 : 0.0;  // RGB patches read three consecutive channels
-    v_mask_r = channel_mask(a_patch.y);
-    v_mask_g = channel_mask(a_patch.y + step);
-    v_mask_b = channel_mask(a_patch.y + 2.0 * step);
+    r = d < 0.5 ? m0 : vec4(0.0);
+    g = d > 0.5 && d < 1.5 ? m0 : vec4(0.0);
+    b = d > 1.5 ? m0 : vec4(0.0);
+  } else if (a_patch.z > 2.5) {  // RGB patches read three consecutive channels
+    g = m1;
+    b = channel_mask(a_patch.y + 2.0);
   }
-  v_scale = a_patch.z > 1.5 && a_patch.z < 2.5 ? vec3(a_patch.x) : a_patch.x * a_tint;
+  // Times the tint; a 2-channel patch's second channel times its second tint (zero on every
+  // other patch: pack_format.h).
+  v_mask_r = r * a_tint.r + m1 * a_tint_b.r;
+  v_mask_g = g * a_tint.g + m1 * a_tint_b.g;
+  v_mask_b = b * a_tint.b + m1 * a_tint_b.b;
+  v_scale = a_patch.x;
   v_square = a_patch.w > 0.5 ? 1 : 0;
   v_unit = int(a_unit + 0.5);
   v_rect = a_rect;
