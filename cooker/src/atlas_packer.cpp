@@ -7,6 +7,7 @@
 
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/pack_format.h"
+#include "worker_pool.h"
 
 namespace lightpatch::cooker {
 
@@ -115,9 +116,11 @@ struct Fill {
   int64_t texels() const { return int64_t(align_up(used_width)) * align_up(used_height); }
 };
 
-// With `all`, gives up (false) at the first patch that does not fit.
+// With `all`, gives up (false) at the first patch that does not fit, or once the atlas takes
+// `give_up_at` texels or more (it can only grow: a search's trial that cannot win).
 bool fill(const std::vector<PackItem>& items, const std::vector<size_t>& order, int width,
-          int height, bool all, Fill* out) {
+          int height, bool all, Fill* out,
+          int64_t give_up_at = std::numeric_limits<int64_t>::max()) {
   std::vector<Skyline> channels(4, Skyline(width));
   std::vector<Segment> rgb;
   out->placements.assign(order.size(), Placement{-1, 0, 0, 0});
@@ -152,6 +155,7 @@ bool fill(const std::vector<PackItem>& items, const std::vector<size_t>& order, 
     out->placements[k] = Placement{0, x, y, channel};
     out->used_width = std::max(out->used_width, x + w);
     out->used_height = std::max(out->used_height, y + h);
+    if (all && out->texels() >= give_up_at) return false;
   }
   return true;
 }
@@ -166,9 +170,50 @@ std::vector<int> candidate_widths(int lo, int hi) {
   return out;
 }
 
+// Orders the patches may be placed in: each first by channel count (2, 3, then 1: see
+// atlas_packer.h), then by the key, then by height and width, descending.
+enum class SortKey { kHeight, kLongestSide, kArea, kWidth };
+constexpr SortKey kSortKeys[] = {SortKey::kHeight, SortKey::kLongestSide, SortKey::kArea,
+                                 SortKey::kWidth};
+
+void sort_items(const std::vector<PackItem>& items, SortKey key, std::vector<size_t>& order) {
+  auto measure = [key](const PackItem& p) -> int64_t {
+    switch (key) {
+      case SortKey::kLongestSide:
+        return std::max(p.width, p.height);
+      case SortKey::kArea:
+        return int64_t(p.width) * p.height;
+      case SortKey::kWidth:
+        return p.width;
+      case SortKey::kHeight:
+        break;
+    }
+    return p.height;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const PackItem& p = items[a];
+    const PackItem& q = items[b];
+    // 2-channel patches first, in pairs (channels 0-1 and 2-3 of one place); then 3-channel ones
+    // above them, whose alpha plane the 1-channel ones fill last. (2-channel patches after the
+    // 3-channel ones would raise the alpha plane's skyline over their empty alpha.)
+    auto rank = [](int channels) { return channels == 2 ? 0 : channels == 3 ? 1 : 2; };
+    if (p.channels != q.channels) return rank(p.channels) < rank(q.channels);
+    if (measure(p) != measure(q)) return measure(p) > measure(q);
+    if (p.height != q.height) return p.height > q.height;
+    return p.width > q.width;
+  });
+}
+
+// Patch placements the search for the last atlas may make (patches times widths and orders
+// tried): every width in every order for a pack of a few hundred patches, the candidate widths
+// for a large one. The small inn at draft (5,719 patches, 2 threads): 0.07 s a search against
+// 0.04 s for the candidate widths in one order; at 2^20, 0.12 s, for fewer bytes only on the small
+// inn without bounce light (2.3 % waste instead of 3.2 %).
+constexpr int64_t kSearchPlacements = int64_t(1) << 19;
+
 }  // namespace
 
-AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
+AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size, int threads) {
   AtlasLayout out;
   out.placements.resize(items.size());
   if (max_size < kMinAtlasSize || max_size % kAtlasAlign != 0) {
@@ -185,17 +230,7 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
   }
   std::vector<size_t> order(items.size());
   std::iota(order.begin(), order.end(), size_t(0));
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    const PackItem& p = items[a];
-    const PackItem& q = items[b];
-    // 2-channel patches first, in pairs (channels 0-1 and 2-3 of one place); then 3-channel ones
-    // above them, whose alpha plane the 1-channel ones fill last. (2-channel patches after the
-    // 3-channel ones would raise the alpha plane's skyline over their empty alpha.)
-    auto rank = [](int channels) { return channels == 2 ? 0 : channels == 3 ? 1 : 2; };
-    if (p.channels != q.channels) return rank(p.channels) < rank(q.channels);
-    if (p.height != q.height) return p.height > q.height;
-    return p.width > q.width;
-  });
+  sort_items(items, SortKey::kHeight, order);
   const int64_t max_texels = int64_t(max_size) * max_size;
   while (!order.empty()) {
     if (out.atlases.size() >= 256) throw CookError("the patches need more than 256 atlases");
@@ -210,28 +245,80 @@ AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size) {
       widest = std::max(widest, items[i].width);
     }
     const int64_t need = std::max(rgb_texels, (channel_texels + 3) / 4);
-    Fill best, trial;
+    Fill best;
     bool found = false;
-    auto try_width = [&](int w) {
-      if (fill(items, order, w, max_size, true, &trial) &&
-          (!found || trial.texels() < best.texels())) {
-        std::swap(best, trial);
-        found = true;
-      }
-    };
     if (need <= max_texels) {
-      // Everything left may fit one atlas: try widths from the narrowest that can hold it, then
-      // every few texels around the best of them.
+      // Everything left may fit one atlas. How well the skylines fill it jumps from one width
+      // to the next and from one order to another, so try many: the candidate widths in each
+      // order, then every few texels around the best of them, then, while the budget of
+      // placements lasts, every width (a small pack tries every width in every order).
       const int lo = std::min(max_size, std::max(align_up(widest), align_up(need / max_size)));
       const std::vector<int> widths = candidate_widths(lo, max_size);
-      for (int w : widths) try_width(w);
+      const int64_t trials_allowed =
+          std::max<int64_t>(kSearchPlacements / int64_t(order.size()), 1);
+      std::vector<std::vector<size_t>> orders;
+      std::vector<std::vector<char>> tried;
+      for (SortKey key : kSortKeys) {
+        orders.push_back(order);
+        sort_items(items, key, orders.back());
+        tried.emplace_back(size_t(max_size / kAtlasAlign) + 1, 0);
+      }
+      struct Trial {
+        size_t order;
+        int width;
+      };
+      std::vector<Trial> batch;
+      int64_t trials = 0, best_texels = 0;
+      Trial best_trial{0, 0};
+      // Queues a trial not made yet, within the budget unless `always`.
+      auto add = [&](size_t k, int w, bool always) {
+        char& t = tried[k][size_t(w / kAtlasAlign)];
+        if (t || (!always && trials >= trials_allowed)) return;
+        t = 1;
+        ++trials;
+        batch.push_back(Trial{k, w});
+      };
+      // Runs the queued trials on the threads. Strictly fewer texels wins and the first of equals
+      // (in queue order) is kept, so the pack is the same on every target and thread count.
+      auto run = [&]() {
+        std::vector<int64_t> texels(batch.size(), 0);
+        const int64_t give_up_at = found ? best_texels : std::numeric_limits<int64_t>::max();
+        parallel_for(int(batch.size()), threads, [&](int i) {
+          Fill f;
+          const Trial& t = batch[size_t(i)];
+          if (fill(items, orders[t.order], t.width, max_size, true, &f, give_up_at))
+            texels[size_t(i)] = f.texels();
+        });
+        for (size_t i = 0; i < batch.size(); ++i) {
+          if (texels[i] > 0 && (!found || texels[i] < best_texels)) {
+            best_texels = texels[i];
+            best_trial = batch[i];
+            found = true;
+          }
+        }
+        batch.clear();
+      };
+      for (size_t k = 0; k < orders.size(); ++k) {
+        for (int w : widths) add(k, w, k == 0);
+        run();  // so that each order's trials give up where the orders before did better
+      }
       if (found) {
-        const int w0 = align_up(best.used_width);
+        // Every few texels around the best width so far, in every order.
+        const int w0 = best_trial.width;
         const auto at = std::lower_bound(widths.begin(), widths.end(), w0);
         const int from = at == widths.begin() ? lo : *(at - 1);
         const int to = at == widths.end() || at + 1 == widths.end() ? max_size : *(at + 1);
         const int step = std::max(kAtlasAlign, align_up((to - from) / 16));
-        for (int w = from; w <= to; w += step) try_width(w);
+        for (size_t k = 0; k < orders.size(); ++k)
+          for (int w = from; w <= to; w += step) add(k, w, k == 0);
+        run();
+      }
+      for (int w = lo; w <= max_size && trials < trials_allowed; w += kAtlasAlign)
+        for (size_t k = 0; k < orders.size(); ++k) add(k, w, false);
+      run();
+      if (found) {
+        order = std::move(orders[best_trial.order]);
+        fill(items, order, best_trial.width, max_size, true, &best);
       }
     }
     if (!found) fill(items, order, max_size, max_size, false, &best);

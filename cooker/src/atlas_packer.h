@@ -6,7 +6,10 @@
 // each at the lowest, then leftmost, place of its channels' skylines. Atlas sides are multiples of
 // pack::kAtlasAlign up to the maximum size: while the patches left need more than one atlas of
 // the maximum size, the atlas is that size (what does not fit waits for the next); the last one
-// takes the width, among those tried, that holds all the patches left in the fewest texels.
+// takes the width and order, among those tried, that hold all the patches left in the fewest
+// texels: the orders by height, longest side, area and width (each after the channel count), at
+// widths a fifth apart, then every few texels around the best, then every width while a budget of
+// placements lasts (all of them for a pack of a few hundred patches).
 // Patches touch: the runtime reads only a patch's own texels (texelFetch at texel centres), so
 // no gutter is needed.
 #pragma once
@@ -41,7 +44,8 @@ struct AtlasLayout {
 
 // `max_size`: the largest atlas side, a multiple of pack::kAtlasAlign >= kMinAtlasSize. Throws
 // CookError if it is not, if a patch is larger than max_size, or if more than 256 atlases would
-// be needed.
-AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size);
+// be needed. `threads` (>= 1) share the search for the last atlas's shape; the layout does not
+// depend on their number.
+AtlasLayout pack_atlases(const std::vector<PackItem>& items, int max_size, int threads = 1);
 
 }  // namespace lightpatch::cooker

@@ -974,11 +974,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   // texels than splitting the base and static-shadow patches alone: they cost drawing.
   std::vector<StoredPatch> stored =
       options.fill_alpha ? split_for_alpha(patches, false) : whole_patches(patches);
-  AtlasLayout atlas_layout = pack_atlases(pack_items(patches, stored), options.max_atlas_size);
+  AtlasLayout atlas_layout =
+      pack_atlases(pack_items(patches, stored), options.max_atlas_size, threads);
   if (options.fill_alpha) {
     std::vector<StoredPatch> more = split_for_alpha(patches, true);
     if (more.size() > stored.size()) {
-      AtlasLayout smaller = pack_atlases(pack_items(patches, more), options.max_atlas_size);
+      AtlasLayout smaller =
+          pack_atlases(pack_items(patches, more), options.max_atlas_size, threads);
       if (atlas_texels(smaller) < atlas_texels(atlas_layout)) {
         stored = std::move(more);
         atlas_layout = std::move(smaller);

@@ -1,6 +1,7 @@
 // Atlas packing rules: sort order, channel filling (the alpha plane under 3-channel patches),
 // atlas sides that are multiples of 4 and at most the maximum, full atlases then a last one sized
-// to what is left, no overlaps, and the texels wasted against the lower bound.
+// to what is left, no overlaps, the texels wasted against the lower bound, and a layout that does
+// not depend on the threads that searched for it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -153,6 +154,62 @@ TEST(AtlasPacker, RandomItemsNeverOverlapAndWasteLittle) {
                 100.0 * over);
     EXPECT_LE(over, 0.08) << "max " << max_size;
   }
+}
+
+TEST(AtlasPacker, SmallPacksTryEveryWidthAndOrder) {
+  // The 103 patches of room_soft cooked on a 128 page (`write_test_scene room_soft`, `cook
+  // --lightmap-size 128`, preview): the candidate widths in height order alone left 10.7 % of the
+  // atlas empty (32x116); trying every width in four orders finds 112x32, 7.5 %. Issue 12's bar
+  // for packing waste is 10 %.
+  const std::vector<PackItem> items = {
+      {6, 11, 1},  {32, 32, 1}, {32, 32, 1}, {6, 25, 1},  {17, 8, 1},  {16, 9, 1},  {16, 16, 1},
+      {28, 10, 1}, {8, 8, 1},   {8, 8, 1},   {8, 8, 1},   {8, 8, 1},   {16, 16, 1}, {8, 8, 1},
+      {8, 8, 1},   {4, 8, 1},   {8, 4, 1},   {6, 4, 1},   {16, 16, 1}, {16, 16, 1}, {11, 7, 1},
+      {16, 16, 1}, {12, 5, 1},  {6, 6, 1},   {4, 4, 1},   {4, 4, 1},   {4, 4, 1},   {4, 4, 1},
+      {4, 4, 1},   {11, 5, 1},  {11, 5, 1},  {6, 3, 1},   {2, 2, 1},   {3, 4, 1},   {3, 1, 1},
+      {2, 1, 1},   {32, 32, 1}, {15, 32, 1}, {32, 32, 1}, {32, 32, 1}, {15, 16, 1}, {32, 15, 1},
+      {16, 15, 1}, {28, 32, 1}, {21, 10, 1}, {8, 10, 1},  {16, 16, 1}, {8, 8, 1},   {2, 1, 1},
+      {6, 5, 1},   {8, 8, 1},   {8, 8, 1},   {11, 5, 1},  {1, 5, 1},   {6, 2, 1},   {3, 3, 1},
+      {3, 2, 1},   {3, 1, 1},   {16, 16, 1}, {8, 8, 1},   {8, 6, 1},   {16, 5, 1},  {12, 5, 1},
+      {12, 9, 1},  {4, 4, 2},   {6, 5, 1},   {2, 2, 1},   {8, 8, 1},   {6, 8, 1},   {2, 2, 1},
+      {3, 4, 1},   {2, 4, 1},   {4, 2, 1},   {2, 2, 1},   {3, 1, 1},   {1, 4, 1},   {18, 18, 1},
+      {14, 10, 2}, {8, 8, 1},   {8, 8, 1},   {3, 8, 1},   {14, 5, 2},  {6, 6, 2},   {4, 4, 1},
+      {4, 4, 1},   {4, 4, 1},   {6, 7, 1},   {8, 5, 1},   {3, 3, 1},   {4, 4, 1},   {1, 2, 1},
+      {1, 2, 1},   {3, 1, 1},   {2, 2, 1},   {3, 4, 1},   {2, 3, 1},   {2, 2, 1},   {3, 4, 1},
+      {3, 1, 1},   {1, 1, 1},   {1, 1, 1},   {1, 1, 1},   {1, 1, 1}};
+  const AtlasLayout a = pack_atlases(items, 2048);
+  ASSERT_EQ(a.atlases.size(), 1u);
+  const int64_t covered = expect_disjoint(items, a, 2048);
+  const double waste = 1.0 - double(covered) / double(4 * atlas_texels(a));
+  std::printf("%dx%d, %.1f %% of the atlas empty\n", a.atlases[0].width, a.atlases[0].height,
+              100.0 * waste);
+  EXPECT_LE(waste, 0.10);
+}
+
+TEST(AtlasPacker, LayoutDoesNotDependOnTheThreadCount) {
+  uint64_t s = 777;
+  auto next = [&](int n) {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return int((s >> 33) % uint64_t(n));
+  };
+  std::vector<PackItem> items;
+  for (int i = 0; i < 200; ++i) items.push_back(PackItem{1 + next(24), 1 + next(24), 1 + next(3)});
+  const AtlasLayout one = pack_atlases(items, 256, 1);
+  for (int threads : {2, 3}) {
+    const AtlasLayout more = pack_atlases(items, 256, threads);
+    ASSERT_EQ(more.atlases.size(), one.atlases.size());
+    for (size_t k = 0; k < one.atlases.size(); ++k) {
+      EXPECT_EQ(more.atlases[k].width, one.atlases[k].width);
+      EXPECT_EQ(more.atlases[k].height, one.atlases[k].height);
+    }
+    for (size_t i = 0; i < items.size(); ++i) {
+      EXPECT_EQ(more.placements[i].atlas, one.placements[i].atlas) << i;
+      EXPECT_EQ(more.placements[i].x, one.placements[i].x) << i;
+      EXPECT_EQ(more.placements[i].y, one.placements[i].y) << i;
+      EXPECT_EQ(more.placements[i].channel, one.placements[i].channel) << i;
+    }
+  }
+  expect_disjoint(items, one, 256);
 }
 
 TEST(AtlasPacker, RejectsPatchesLargerThanTheMaximumAndBadMaxima) {
