@@ -324,6 +324,77 @@ nlohmann::json probe_report(const PackContents& c) {
   return j;
 }
 
+// The light map's surfaces for choosing between a map's two cuts place by place: each chart's
+// rectangle (a region's rectangle where it lists none) a unit, and per texel the unit it lies in
+// (-1: none). Units whose rectangles overlap are joined from the start.
+struct ChartUnits {
+  int width = 0, height = 0;
+  std::vector<int> unit_of;  // per light-map texel
+  std::vector<int> parent;   // union-find over the units
+};
+
+int find_unit(std::vector<int>& parent, int u) {
+  while (parent[size_t(u)] != u) {
+    parent[size_t(u)] = parent[size_t(parent[size_t(u)])];
+    u = parent[size_t(u)];
+  }
+  return u;
+}
+
+void join_units(std::vector<int>& parent, int a, int b) {
+  a = find_unit(parent, a);
+  b = find_unit(parent, b);
+  if (a != b) parent[size_t(std::max(a, b))] = std::min(a, b);
+}
+
+ChartUnits chart_units(const Layout& layout) {
+  ChartUnits u;
+  u.width = layout.width;
+  u.height = layout.height;
+  u.unit_of.assign(size_t(u.width) * size_t(u.height), -1);
+  for (const Region& region : layout.regions) {
+    std::vector<Rect> rects = region.charts;
+    if (rects.empty()) rects.push_back(region.rect);
+    for (const Rect& r : rects) {
+      const int id = int(u.parent.size());
+      u.parent.push_back(id);
+      for (int y = std::max(0, r.y); y < std::min(u.height, r.y + r.h); ++y) {
+        for (int x = std::max(0, r.x); x < std::min(u.width, r.x + r.w); ++x) {
+          int& at = u.unit_of[size_t(y) * size_t(u.width) + size_t(x)];
+          if (at >= 0) join_units(u.parent, at, id);
+          at = id;
+        }
+      }
+    }
+  }
+  return u;
+}
+
+// Joins the units a patch's rectangle touches; returns one of them (`none` if it touches none).
+int join_patch_units(const ChartUnits& u, std::vector<int>& parent, const Rect& d, int none) {
+  int first = -1;
+  for (int y = std::max(0, d.y); y < std::min(u.height, d.y + d.h); ++y) {
+    for (int x = std::max(0, d.x); x < std::min(u.width, d.x + d.w); ++x) {
+      const int at = u.unit_of[size_t(y) * size_t(u.width) + size_t(x)];
+      if (at < 0) continue;
+      if (first < 0)
+        first = at;
+      else if (at != first)
+        join_units(parent, first, at);
+    }
+  }
+  return first < 0 ? none : first;
+}
+
+// A set of charts' two ways to store a map there (ChartUnits): whole, or as its direct and bounce
+// parts; bytes as patch_bytes() counts them, destination texels drawn.
+struct ChartSetChoice {
+  uint64_t whole_bytes = 0, parts_bytes = 0, whole_texels = 0, parts_texels = 0;
+  bool used = false, in_parts = false;
+  double whole_cost() const { return double(whole_bytes) + kDrawTexelBytes * double(whole_texels); }
+  double parts_cost() const { return double(parts_bytes) + kDrawTexelBytes * double(parts_texels); }
+};
+
 }  // namespace
 
 std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const BakedMaps& maps,
@@ -607,10 +678,18 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   // costs stored whole and as its two parts.
   struct PartsDecision {
     bool considered = false, chosen = false;
-    uint64_t whole_bytes = 0, parts_bytes = 0;    // atlas channel-texels, records, quads
-    uint64_t whole_texels = 0, parts_texels = 0;  // destination texels drawn
+    uint64_t whole_bytes = 0, parts_bytes = 0;     // atlas channel-texels, records, quads
+    uint64_t whole_texels = 0, parts_texels = 0;   // destination texels drawn
+    uint64_t stored_bytes = 0, stored_texels = 0;  // of the patches kept
+    int sets_used = 0, sets_in_parts = 0;          // sets of charts no patch leaves; those in parts
+    // Until assembled: both cuts, each patch's set of charts, and each set's costs and choice.
+    std::vector<SourcePatch> whole, parts;
+    std::vector<int> whole_set, parts_set;
+    std::vector<ChartSetChoice> sets;
+    ColourDecision parts_colour;
   };
   std::vector<PartsDecision> parts(jobs.size());
+  const ChartUnits units = chart_units(layout);
   parallel_for(int(jobs.size()), threads, [&](int i) {
     const MapJob& j = jobs[size_t(i)];
     // How a map is cut: its significance threshold (map units) and each texel's factor on the
@@ -819,16 +898,43 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         };
         weigh(plain, &pd.whole_bytes, &pd.whole_texels);
         weigh(split_into, &pd.parts_bytes, &pd.parts_texels);
-        pd.chosen = options.always_parts ||
-                    double(pd.parts_bytes) + kDrawTexelBytes * double(pd.parts_texels) <
-                        double(pd.whole_bytes) + kDrawTexelBytes * double(pd.whole_texels);
-        if (pd.chosen) {
-          std::stable_sort(
-              split_into.begin(), split_into.end(),
-              [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
-          plain = std::move(split_into);
-          colour[size_t(i)] = split_colours;
+        // Per set of charts that no patch of either cut leaves, the cut that costs less there:
+        // both store the map's light on every chart within the tolerance, so a map may be whole
+        // on one surface (direct light and bounce mixed in one colour, a shadow's edge) and in
+        // parts on another (bounce light over a lit wall). The direct part's patches and the
+        // bounce part's reach the same charts, so their components are joined by each other's.
+        std::vector<int> parent = units.parent;
+        const int none = int(parent.size());  // patches on no chart: one set of their own
+        parent.push_back(none);
+        std::vector<int> whole_unit(plain.size()), parts_unit(split_into.size());
+        for (size_t k = 0; k < plain.size(); ++k)
+          whole_unit[k] = join_patch_units(units, parent, plain[k].dest, none);
+        for (size_t k = 0; k < split_into.size(); ++k)
+          parts_unit[k] = join_patch_units(units, parent, split_into[k].dest, none);
+        pd.sets.assign(parent.size(), ChartSetChoice{});
+        for (size_t k = 0; k < plain.size(); ++k) {
+          whole_unit[k] = find_unit(parent, whole_unit[k]);
+          ChartSetChoice& c = pd.sets[size_t(whole_unit[k])];
+          c.whole_bytes += patch_bytes(plain[k]);
+          c.whole_texels += uint64_t(plain[k].dest.w) * uint64_t(plain[k].dest.h);
         }
+        for (size_t k = 0; k < split_into.size(); ++k) {
+          parts_unit[k] = find_unit(parent, parts_unit[k]);
+          ChartSetChoice& c = pd.sets[size_t(parts_unit[k])];
+          c.parts_bytes += patch_bytes(split_into[k]);
+          c.parts_texels += uint64_t(split_into[k].dest.w) * uint64_t(split_into[k].dest.h);
+        }
+        for (ChartSetChoice& c : pd.sets) {
+          c.used = c.whole_texels > 0 || c.parts_texels > 0;
+          c.in_parts = c.used && (options.always_parts || c.parts_cost() < c.whole_cost());
+        }
+        // Stored once every map is cut (below), when each light's texels are known.
+        pd.whole = std::move(plain);
+        pd.parts = std::move(split_into);
+        pd.whole_set = std::move(whole_unit);
+        pd.parts_set = std::move(parts_unit);
+        pd.parts_colour = split_colours;
+        plain.clear();
       }
     }
     SplitDecision& sd = split[size_t(i)];
@@ -859,6 +965,98 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       // A group's light-map patches first, then its indirect ones (pack_format.h).
       for (SourcePatch& p : indirect) detail.push_back(std::move(p));
     }
+  });
+  // Each map in parts on the sets of charts where that costs less (above), but no light's change
+  // drawing more texels than the costliest light change with every map whole: a light's sets
+  // that save the most per texel added go first. (The base map and the static shadows are drawn
+  // on a full rebuild and object toggles only.) Per set, the full inn's costliest light change
+  // rose from 618,996 to 765,450 texels without this bound.
+  if (!options.always_parts) {
+    std::map<int, uint64_t> light_texels;  // per light: its maps' texels, each stored whole
+    for (size_t i = 0; i < jobs.size(); ++i) {
+      const int l = jobs[i].prototype.light;
+      if (l < 0) continue;
+      uint64_t t = parts[i].whole_texels;
+      if (!parts[i].considered) {
+        t = 0;
+        for (const SourcePatch& p : per_job[i]) t += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      }
+      light_texels[l] += t;
+    }
+    uint64_t cap = 0;
+    for (const auto& [l, t] : light_texels) cap = std::max(cap, t);
+    struct Candidate {
+      size_t job, set;
+      double saving;  // weighed cost, whole less parts (> 0)
+      int64_t extra;  // texels drawn, parts less whole
+    };
+    std::map<int, std::vector<Candidate>> by_light;
+    for (size_t i = 0; i < jobs.size(); ++i) {
+      if (jobs[i].prototype.light < 0 || !parts[i].considered) continue;
+      for (size_t k = 0; k < parts[i].sets.size(); ++k) {
+        const ChartSetChoice& c = parts[i].sets[k];
+        if (!c.in_parts) continue;
+        by_light[jobs[i].prototype.light].push_back(
+            Candidate{i, k, c.whole_cost() - c.parts_cost(),
+                      int64_t(c.parts_texels) - int64_t(c.whole_texels)});
+      }
+    }
+    for (auto& [l, cands] : by_light) {
+      // Sets that draw no more texels first, then by saving per texel added; ties in job order.
+      auto rank = [](const Candidate& c) {
+        return c.extra <= 0 ? std::numeric_limits<double>::infinity() : c.saving / double(c.extra);
+      };
+      std::stable_sort(cands.begin(), cands.end(),
+                       [&](const Candidate& a, const Candidate& b) { return rank(a) > rank(b); });
+      int64_t texels = int64_t(light_texels[l]);
+      for (const Candidate& c : cands) {
+        if (c.extra <= 0 || texels + c.extra <= int64_t(cap))
+          texels += c.extra;
+        else
+          parts[c.job].sets[c.set].in_parts = false;
+      }
+    }
+  }
+  parallel_for(int(jobs.size()), threads, [&](int ii) {
+    const size_t i = size_t(ii);
+    PartsDecision& pd = parts[i];
+    if (!pd.considered) return;
+    std::vector<SourcePatch>& plain = per_job[i];
+    plain.clear();
+    for (size_t k = 0; k < pd.whole.size(); ++k)
+      if (!pd.sets[size_t(pd.whole_set[k])].in_parts) plain.push_back(std::move(pd.whole[k]));
+    for (size_t k = 0; k < pd.parts.size(); ++k)
+      if (pd.sets[size_t(pd.parts_set[k])].in_parts) plain.push_back(std::move(pd.parts[k]));
+    // Level 0 first within a job (each cut's patches already are).
+    std::stable_sort(plain.begin(), plain.end(),
+                     [](const SourcePatch& a, const SourcePatch& b) { return a.level < b.level; });
+    for (const ChartSetChoice& c : pd.sets) {
+      pd.sets_used += c.used ? 1 : 0;
+      pd.sets_in_parts += c.in_parts ? 1 : 0;
+    }
+    pd.chosen = pd.sets_in_parts > 0;
+    if (pd.chosen) {
+      // The cut's counts are those of the cut with the most sets; the final pieces' colours are
+      // counted again.
+      ColourDecision& cd = colour[i];
+      if (2 * pd.sets_in_parts > pd.sets_used) cd = pd.parts_colour;
+      cd.tinted = cd.two_tints = 0;
+      for (const SourcePatch& p : plain) {
+        cd.two_tints += p.channels == 2 ? 1 : 0;
+        cd.tinted +=
+            p.channels == 1 && (p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255) ? 1 : 0;
+      }
+    }
+    uint64_t channel_texels = 0;
+    for (const SourcePatch& p : plain) {
+      pd.stored_bytes += patch_bytes(p);
+      pd.stored_texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      channel_texels += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels);
+    }
+    split[i].plain = channel_texels;
+    pd.whole.clear();
+    pd.parts.clear();
+    pd.sets.clear();
   });
   // One choice per light group (the base map with the static shadows; a light's C_l with its
   // S_ol and pair corrections), so that a state's indirect part is the bounce light of the groups
@@ -1214,10 +1412,14 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         chosen += d.chosen ? 1 : 0;
         whole_bytes += d.whole_bytes;
         whole_texels += d.whole_texels;
-        stored_bytes += d.chosen ? d.parts_bytes : d.whole_bytes;
-        stored_texels += d.chosen ? d.parts_texels : d.whole_texels;
+        stored_bytes += d.stored_bytes;
+        stored_texels += d.stored_texels;
         per.push_back({{"map", jobs[i].what},
                        {"parts", d.chosen},
+                       {"chart_sets", d.sets_used},
+                       {"chart_sets_in_parts", d.sets_in_parts},
+                       {"stored_bytes", d.stored_bytes},
+                       {"stored_texels", d.stored_texels},
                        {"whole_bytes", d.whole_bytes},
                        {"parts_bytes", d.parts_bytes},
                        {"whole_texels", d.whole_texels},
@@ -1240,9 +1442,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
            "output steps the authored image shows there and at least level_tolerance_steps; the "
            "map is stored as its direct part's patches plus its bounce part's (the map less the "
            "direct part, significant from bounce_threshold_fraction of the threshold, within that "
-           "tolerance at every texel) where that costs less: bytes (atlas channel-texels, records, "
-           "a quad each) plus draw_texel_bytes per destination texel; a map whose threshold is a "
-           "step of its own peak keeps level_tolerance_steps"}};
+           "tolerance at every texel) where that costs less, chosen per set of charts that no "
+           "patch of either cut leaves (chart_sets; parts: any set in parts): bytes (atlas "
+           "channel-texels, records, a quad each) plus draw_texel_bytes per destination texel; a "
+           "map whose threshold is a step of its own peak keeps level_tolerance_steps"}};
     }
     j["patches_by_target"] = {{"light_map", count[0]}, {"indirect_map", count[1]}};
     j["texels_by_target"] = {{"light_map", texels[0]}, {"indirect_map", texels[1]}};
