@@ -1,10 +1,18 @@
 #version 300 es
 // Decodes a patch texel (pack_format.h: x = q/255, linear or squared, times scale and sign) and
-// outputs it times the draw's factor; the target adds it with blending (ONE, ONE).
+// outputs it times the draw's factor; the target adds it with blending (ONE, ONE). Linked twice:
+// reading any of eight atlases by the patch's unit, and with LIGHTPATCH_ONE_ATLAS defined (the
+// runtime adds it after the #version line) reading one.
 precision highp float;
 precision highp int;
 
+#ifdef LIGHTPATCH_ONE_ATLAS
+// A run of patches of one atlas (Runtime::open): the runtime points this sampler at its unit.
+// (llvmpipe runs every side of the branch below: eight fetches a texel instead of one.)
+uniform highp sampler2D u_atlas;
+#else
 uniform highp sampler2D u_atlas[8];
+#endif
 uniform vec3 u_factor;
 
 in vec2 v_atlas;
@@ -21,6 +29,9 @@ void main() {
   // v_atlas is at texel centres (n + 0.5); texelFetch needs no derivatives, so the branch on the
   // unit is fine (sampler arrays only take constant indices in GLSL ES 3.00).
   ivec2 t = ivec2(floor(v_atlas));
+#ifdef LIGHTPATCH_ONE_ATLAS
+  vec4 q = texelFetch(u_atlas, t, 0);
+#else
   vec4 q;
   if (v_unit == 0) q = texelFetch(u_atlas[0], t, 0);
   else if (v_unit == 1) q = texelFetch(u_atlas[1], t, 0);
@@ -30,6 +41,7 @@ void main() {
   else if (v_unit == 5) q = texelFetch(u_atlas[5], t, 0);
   else if (v_unit == 6) q = texelFetch(u_atlas[6], t, 0);
   else q = texelFetch(u_atlas[7], t, 0);
+#endif
   // Decoded before the masks combine channels (a 2-channel patch's masks blend two).
   if (v_square == 1) q *= q;
   vec3 x = vec3(dot(q, v_mask_r), dot(q, v_mask_g), dot(q, v_mask_b));

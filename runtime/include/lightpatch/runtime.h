@@ -262,14 +262,19 @@ class Runtime {
   uint32_t indirect_map_ = 0, indirect_accumulator_ = 0;
   uint32_t indirect_map_fbo_ = 0, indirect_accumulator_fbo_ = 0;
   uint32_t vbo_ = 0, ibo_ = 0, vao_ = 0;
-  // Level-0 patches, magnified patches (pack_format.h, "Magnified patches"), present steps.
-  uint32_t patch_program_ = 0, magnified_program_ = 0, present_program_ = 0;
-  int32_t factor_location_[2] = {-1, -1}, present_scale_location_ = -1;  // [0] patch, [1] magnified
-  int32_t patch_size_location_[2] = {-1, -1}, present_size_location_ = -1;  // u_target_size
-  int32_t magnified_atlas_location_ = -1;  // the magnified program's u_atlas (its one sampler)
+  // Level-0 patches of any of 8 atlases, magnified patches (pack_format.h, "Magnified patches"),
+  // level-0 patches of one atlas, present steps.
+  uint32_t patch_program_ = 0, magnified_program_ = 0, one_atlas_program_ = 0, present_program_ = 0;
+  // [0] patch, [1] magnified, [2] one atlas (GlSink's program numbers)
+  int32_t factor_location_[3] = {-1, -1, -1}, present_scale_location_ = -1;
+  int32_t patch_size_location_[3] = {-1, -1, -1}, present_size_location_ = -1;  // u_target_size
+  // The u_atlas of the programs that read one atlas ([1] magnified, [2] one atlas; [0] unused).
+  int32_t atlas_location_[3] = {-1, -1, -1};
   // Per patch: end of the run of following patches whose atlases share a batch of 8 texture
-  // units (one draw call per run; with <= 8 atlases every group is one run).
+  // units (one draw call per run; with <= 8 atlases every group is one run), and whether the
+  // patches from it to that end read one atlas (drawn by the one-atlas program).
   uint32_t* run_end_ = nullptr;
+  uint8_t* run_one_atlas_ = nullptr;
   // CPU path: the double accumulator and the half-float maps uploaded to the textures (the pack's
   // map set, pack_view.h).
   double* cpu_accumulator_ = nullptr;

@@ -55,9 +55,17 @@ bool es_version_at_least(int want_major, int want_minor) {
   return major > want_major || (major == want_major && minor >= want_minor);
 }
 
-GLuint compile(GLenum type, const char* source, Error* error) {
+// `define` (may be null): a line added after the source's first (its #version line).
+GLuint compile(GLenum type, const char* source, const char* define, Error* error) {
   GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
+  const char* newline = define ? std::strchr(source, '\n') : nullptr;
+  if (newline) {
+    const char* parts[3] = {source, define, newline + 1};
+    const GLint lengths[3] = {GLint(newline + 1 - source), -1, -1};
+    glShaderSource(shader, 3, parts, lengths);
+  } else {
+    glShaderSource(shader, 1, &source, nullptr);
+  }
   glCompileShader(shader);
   GLint ok = 0;
   glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
@@ -71,10 +79,11 @@ GLuint compile(GLenum type, const char* source, Error* error) {
   return shader;
 }
 
-GLuint link(const char* vertex, const char* fragment, Error* error) {
-  GLuint vs = compile(GL_VERTEX_SHADER, vertex, error);
+GLuint link(const char* vertex, const char* fragment, Error* error,
+            const char* fragment_define = nullptr) {
+  GLuint vs = compile(GL_VERTEX_SHADER, vertex, nullptr, error);
   if (!vs) return 0;
-  GLuint fs = compile(GL_FRAGMENT_SHADER, fragment, error);
+  GLuint fs = compile(GL_FRAGMENT_SHADER, fragment, fragment_define, error);
   if (!fs) {
     glDeleteShader(vs);
     return 0;
@@ -159,13 +168,16 @@ class GlSink final : public DrawSink {
     // A half-float accumulator holds the presented scale already (runtime.h).
     const float s = r_.path_ == RecomposePath::kGpuHalf ? r_.inverse_scale_ : 1.0f;
     const float f[3] = {factor[0] * s, factor[1] * s, factor[2] * s};
-    bool factor_set[2] = {false, false};
+    bool factor_set[3] = {false, false, false};
     const uint32_t end = first + count;
     while (first < end) {
       uint32_t run = r_.run_end_[first];
       if (run > end) run = end;
-      // A run is all magnified or all level 0 (Runtime::open): one program for it.
-      const int k = pack::patch_level(r_.pack_.patch(first).flags) > 0 ? 1 : 0;
+      // A run is all magnified or all level 0 (Runtime::open): one program for it, the
+      // one-atlas program for level-0 patches that read one atlas.
+      const int k = pack::patch_level(r_.pack_.patch(first).flags) > 0 ? 1
+                    : r_.run_one_atlas_[first]                         ? 2
+                                                                       : 0;
       use_patch_program(k);
       if (!factor_set[k]) {
         glUniform3f(r_.factor_location_[k], f[0], f[1], f[2]);
@@ -181,10 +193,10 @@ class GlSink final : public DrawSink {
         }
         batch_ = int(batch);
       }
-      // The magnified program samples one atlas (a run of magnified patches has one): its unit.
-      if (k == 1 && int(atlas % kUnits) != magnified_unit_) {
-        magnified_unit_ = int(atlas % kUnits);
-        glUniform1i(r_.magnified_atlas_location_, magnified_unit_);
+      // The programs that sample one atlas (a run of magnified patches has one): its unit.
+      if (k > 0 && int(atlas % kUnits) != unit_[k]) {
+        unit_[k] = int(atlas % kUnits);
+        glUniform1i(r_.atlas_location_[k], unit_[k]);
       }
       draw_quads(first, run - first);
       first = run;
@@ -206,11 +218,13 @@ class GlSink final : public DrawSink {
 
  private:
   enum Mode { kNone, kDraw, kPresent };
-  // Patch program k (0: level-0 patches, 1: magnified ones), its u_target_size the current
-  // target's.
+  // Patch program k (0: level-0 patches, 1: magnified ones, 2: level-0 patches of one atlas),
+  // its u_target_size the current target's.
   void use_patch_program(int k) {
     if (program_ != k) {
-      glUseProgram(k ? r_.magnified_program_ : r_.patch_program_);
+      glUseProgram(k == 1   ? r_.magnified_program_
+                   : k == 2 ? r_.one_atlas_program_
+                            : r_.patch_program_);
       program_ = k;
     }
     if (sized_[k] != target_) {
@@ -259,9 +273,9 @@ class GlSink final : public DrawSink {
   Mode mode_ = kNone;
   uint8_t target_ = pack::kTargetLightMap;
   int batch_ = -1;
-  int program_ = -1;                 // the patch program in use (use_patch_program), or -1
-  int magnified_unit_ = -1;          // the unit the magnified program's u_atlas reads (-1: unset)
-  uint8_t sized_[2] = {0xFF, 0xFF};  // the target each patch program's size is set for
+  int program_ = -1;                       // the patch program in use (use_patch_program), or -1
+  int unit_[3] = {-1, -1, -1};             // the unit programs 1 and 2's u_atlas reads (-1: unset)
+  uint8_t sized_[3] = {0xFF, 0xFF, 0xFF};  // the target each patch program's size is set for
 };
 
 Runtime::~Runtime() {
@@ -293,6 +307,7 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
   planner_.set_value_limit(kHalfMax * scale_);
 
   run_end_ = static_cast<uint32_t*>(std::malloc(sizeof(uint32_t) * (pack.patch_count() + 1)));
+  run_one_atlas_ = static_cast<uint8_t*>(std::malloc(pack.patch_count() + 1));
   atlas_textures_ = static_cast<uint32_t*>(std::calloc(pack.atlas_count() + 1, sizeof(uint32_t)));
   const uint32_t panes = pack.pane_count();
   pane_pick_capacity_ = std::min(limits.max_pane_changes, panes);
@@ -302,7 +317,8 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
       static_cast<uint32_t*>(std::calloc(size_t(pane_pick_capacity_) + 1, sizeof(uint32_t)));
   panes_dirty_ = panes_off_ = panes > 0;
   stats_ = FrameStats();
-  if (!run_end_ || !atlas_textures_ || !pane_target_ || !pane_error_ || !pane_pick_) {
+  if (!run_end_ || !run_one_atlas_ || !atlas_textures_ || !pane_target_ || !pane_error_ ||
+      !pane_pick_) {
     close();
     return set_error(error, Status::kOutOfMemory, "runtime: out of memory");
   }
@@ -316,6 +332,7 @@ Status Runtime::open(const PackView& pack, const RuntimeLimits& limits, Error* e
         (pack::patch_level(pack.patch(p + 1).flags) > 0) == (pack::patch_level(pr.flags) > 0) &&
         (pack::patch_level(pr.flags) == 0 || pack.patch(p + 1).atlas == pr.atlas);
     run_end_[p] = joins ? run_end_[p + 1] : p + 1;
+    run_one_atlas_[p] = !joins || (run_one_atlas_[p + 1] && pack.patch(p + 1).atlas == pr.atlas);
   }
   open_ = true;
   s = create_gl(error);
@@ -445,11 +462,14 @@ Status Runtime::create_programs(Error* error) {
   if (!patch_program_) return Status::kGlError;
   magnified_program_ = link(shaders::patch_vert, shaders::patch_magnified_frag, error);
   if (!magnified_program_) return Status::kGlError;
+  one_atlas_program_ =
+      link(shaders::patch_vert, shaders::patch_frag, error, "#define LIGHTPATCH_ONE_ATLAS 1\n");
+  if (!one_atlas_program_) return Status::kGlError;
   present_program_ = link(shaders::present_vert, shaders::present_frag, error);
   if (!present_program_) return Status::kGlError;
   present_size_location_ = glGetUniformLocation(present_program_, "u_target_size");
-  const uint32_t patch_programs[2] = {patch_program_, magnified_program_};
-  for (int k = 0; k < 2; ++k) {
+  const uint32_t patch_programs[3] = {patch_program_, magnified_program_, one_atlas_program_};
+  for (int k = 0; k < 3; ++k) {
     factor_location_[k] = glGetUniformLocation(patch_programs[k], "u_factor");
     patch_size_location_[k] = glGetUniformLocation(patch_programs[k], "u_target_size");
     glUseProgram(patch_programs[k]);
@@ -458,11 +478,12 @@ Status Runtime::create_programs(Error* error) {
       std::snprintf(name, sizeof name, "u_atlas[%u]", u);
       glUniform1i(glGetUniformLocation(patch_programs[k], name), GLint(u));
     }
+    if (k > 0) {
+      atlas_location_[k] = glGetUniformLocation(patch_programs[k], "u_atlas");
+      glUniform1i(atlas_location_[k], 0);
+    }
     glUniform2f(patch_size_location_[k], float(w), float(h));
   }
-  magnified_atlas_location_ = glGetUniformLocation(magnified_program_, "u_atlas");
-  glUseProgram(magnified_program_);
-  glUniform1i(magnified_atlas_location_, 0);
   glUseProgram(present_program_);
   glUniform1i(glGetUniformLocation(present_program_, "u_accumulator"), GLint(kAccumulatorUnit));
   glUniform2f(present_size_location_, float(w), float(h));
@@ -633,6 +654,7 @@ void Runtime::delete_gl() {
   if (vao_) glDeleteVertexArrays(1, &vao_);
   if (patch_program_) glDeleteProgram(patch_program_);
   if (magnified_program_) glDeleteProgram(magnified_program_);
+  if (one_atlas_program_) glDeleteProgram(one_atlas_program_);
   if (present_program_) glDeleteProgram(present_program_);
   forget_gl();
 }
@@ -641,13 +663,15 @@ void Runtime::forget_gl() {
   if (atlas_textures_) std::memset(atlas_textures_, 0, sizeof(uint32_t) * pack_.atlas_count());
   light_map_ = accumulator_ = indirect_map_ = indirect_accumulator_ = 0;
   light_map_fbo_ = accumulator_fbo_ = indirect_map_fbo_ = indirect_accumulator_fbo_ = 0;
-  vbo_ = ibo_ = vao_ = patch_program_ = magnified_program_ = present_program_ = 0;
+  vbo_ = ibo_ = vao_ = patch_program_ = magnified_program_ = one_atlas_program_ = 0;
+  present_program_ = 0;
 }
 
 void Runtime::close() {
   if (open_) delete_gl();
   std::free(atlas_textures_);
   std::free(run_end_);
+  std::free(run_one_atlas_);
   std::free(cpu_accumulator_);
   std::free(cpu_map_);
   std::free(pane_target_);
@@ -658,6 +682,7 @@ void Runtime::close() {
   pane_pick_capacity_ = 0;
   atlas_textures_ = nullptr;
   run_end_ = nullptr;
+  run_one_atlas_ = nullptr;
   cpu_accumulator_ = nullptr;
   cpu_map_ = nullptr;
   open_ = false;
@@ -909,12 +934,14 @@ Status Runtime::draw_fill_floor(uint64_t texels, Error* error) {
   const uint64_t full = uint64_t(width()) * height();
   set_draw_state();
   glEnable(GL_BLEND);
-  glUseProgram(patch_program_);
-  glUniform2f(patch_size_location_[0], float(width()), float(height()));
+  // The cheapest patch program: one fetch a texel.
+  glUseProgram(one_atlas_program_);
+  glUniform2f(patch_size_location_[2], float(width()), float(height()));
+  glUniform1i(atlas_location_[2], 0);
   glBindFramebuffer(GL_FRAMEBUFFER, accumulator_fbo_);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, atlas_textures_[0]);
-  glUniform3f(factor_location_[0], 0.0f, 0.0f, 0.0f);
+  glUniform3f(factor_location_[2], 0.0f, 0.0f, 0.0f);
   const void* quad =
       reinterpret_cast<const void*>(uintptr_t(pack_.patch_count()) * 6 * sizeof(uint32_t));
   for (uint64_t done = 0; done < texels; done += full) {
