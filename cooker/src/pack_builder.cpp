@@ -62,6 +62,19 @@ uint64_t patch_bytes(const SourcePatch& p) {
          sizeof(pack::PatchRecord) + kPatchDrawBytes;
 }
 
+// The destination texels a patch draws (budgets count these).
+uint64_t dest_texels(const SourcePatch& p) {
+  return uint64_t(p.dest.w) * uint64_t(p.dest.h);
+}
+
+// The atlas channel-texels patches take.
+uint64_t channel_texels(const std::vector<SourcePatch>& v) {
+  uint64_t n = 0;
+  for (const SourcePatch& p : v)
+    n += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels);
+  return n;
+}
+
 float max3(const glm::vec3& v) {
   return std::max({v.x, v.y, v.z});
 }
@@ -839,12 +852,6 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         }
       }
     };
-    auto cost = [](const std::vector<SourcePatch>& v) {
-      uint64_t n = 0;
-      for (const SourcePatch& p : v)
-        n += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * p.channels;
-      return n;
-    };
     std::vector<SourcePatch>& plain = per_job[size_t(i)];
     const bool indirect_part = can_split && j.indirect && !j.indirect->data.empty();
     if (!(j.indirect_only && indirect_part)) {
@@ -893,7 +900,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         auto weigh = [](const std::vector<SourcePatch>& v, uint64_t* bytes, uint64_t* texels) {
           for (const SourcePatch& p : v) {
             *bytes += patch_bytes(p);
-            *texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+            *texels += dest_texels(p);
           }
         };
         weigh(plain, &pd.whole_bytes, &pd.whole_texels);
@@ -916,13 +923,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
           whole_unit[k] = find_unit(parent, whole_unit[k]);
           ChartSetChoice& c = pd.sets[size_t(whole_unit[k])];
           c.whole_bytes += patch_bytes(plain[k]);
-          c.whole_texels += uint64_t(plain[k].dest.w) * uint64_t(plain[k].dest.h);
+          c.whole_texels += dest_texels(plain[k]);
         }
         for (size_t k = 0; k < split_into.size(); ++k) {
           parts_unit[k] = find_unit(parent, parts_unit[k]);
           ChartSetChoice& c = pd.sets[size_t(parts_unit[k])];
           c.parts_bytes += patch_bytes(split_into[k]);
-          c.parts_texels += uint64_t(split_into[k].dest.w) * uint64_t(split_into[k].dest.h);
+          c.parts_texels += dest_texels(split_into[k]);
         }
         for (ChartSetChoice& c : pd.sets) {
           c.used = c.whole_texels > 0 || c.parts_texels > 0;
@@ -938,7 +945,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       }
     }
     SplitDecision& sd = split[size_t(i)];
-    sd.plain = cost(plain);
+    sd.plain = channel_texels(plain);
     if (indirect_part) {
       std::vector<SourcePatch> indirect;
       // A grey map's bounce part is grey too (one channel where the bounce is untinted).
@@ -960,8 +967,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
         cut(light_map_part(*j.map, decoded, scale), layout.regions, kTargetLightMap, detail,
             split_colour[size_t(i)], whole);
       }
-      sd.detail = cost(detail);
-      sd.indirect = cost(indirect);
+      sd.detail = channel_texels(detail);
+      sd.indirect = channel_texels(indirect);
       // A group's light-map patches first, then its indirect ones (pack_format.h).
       for (SourcePatch& p : indirect) detail.push_back(std::move(p));
     }
@@ -979,7 +986,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       uint64_t t = parts[i].whole_texels;
       if (!parts[i].considered) {
         t = 0;
-        for (const SourcePatch& p : per_job[i]) t += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+        for (const SourcePatch& p : per_job[i]) t += dest_texels(p);
       }
       light_texels[l] += t;
     }
@@ -1047,13 +1054,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
             p.channels == 1 && (p.tint[0] != 255 || p.tint[1] != 255 || p.tint[2] != 255) ? 1 : 0;
       }
     }
-    uint64_t channel_texels = 0;
     for (const SourcePatch& p : plain) {
       pd.stored_bytes += patch_bytes(p);
-      pd.stored_texels += uint64_t(p.dest.w) * uint64_t(p.dest.h);
-      channel_texels += uint64_t(p.stored_w()) * uint64_t(p.stored_h()) * uint64_t(p.channels);
+      pd.stored_texels += dest_texels(p);
     }
-    split[i].plain = channel_texels;
+    split[i].plain = channel_texels(plain);
     pd.whole.clear();
     pd.parts.clear();
     pd.sets.clear();
@@ -1338,7 +1343,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     for (const StoredPatch& sp : stored) {
       if (sp.destination != 0) continue;
       const SourcePatch& p = patches[sp.source];
-      const uint64_t t = uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      const uint64_t t = dest_texels(p);
       ++split;
       texels += t;
       lit += group_has_light(p.kind) ? 1 : 0;
@@ -1363,14 +1368,14 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     uint64_t count[2] = {0, 0}, texels[2] = {0, 0};
     for (const SourcePatch& p : patches) {
       count[p.target != 0] += 1;
-      texels[p.target != 0] += uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      texels[p.target != 0] += dest_texels(p);
     }
     uint64_t magnified = 0, magnified_texels = 0, magnified_atlas = 0;
     // Light-map patches of light groups by level: patches, destination texels, atlas texels.
     nlohmann::json by_level = nlohmann::json::array();
     uint64_t lc[pack::kMaxPatchLevel + 1][3] = {};
     for (const SourcePatch& p : patches) {
-      const uint64_t dest = uint64_t(p.dest.w) * uint64_t(p.dest.h);
+      const uint64_t dest = dest_texels(p);
       const uint64_t atlas = uint64_t(p.stored_w()) * uint64_t(p.stored_h());
       if (p.target == kTargetLightMap) {
         uint64_t* l = lc[std::clamp(p.level, 0, int(pack::kMaxPatchLevel))];

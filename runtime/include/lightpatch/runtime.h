@@ -262,10 +262,9 @@ class Runtime {
   uint32_t indirect_map_ = 0, indirect_accumulator_ = 0;
   uint32_t indirect_map_fbo_ = 0, indirect_accumulator_fbo_ = 0;
   uint32_t vbo_ = 0, ibo_ = 0, vao_ = 0;
-  // Level-0 patches of any of 8 atlases, magnified patches (pack_format.h, "Magnified patches"),
-  // level-0 patches of one atlas, present steps.
-  uint32_t patch_program_ = 0, magnified_program_ = 0, one_atlas_program_ = 0, present_program_ = 0;
-  // [0] patch, [1] magnified, [2] one atlas (GlSink's program numbers)
+  // The patch programs: [0] level-0 patches of any of 8 atlases, [1] magnified patches
+  // (pack_format.h, "Magnified patches"), [2] level-0 patches of one atlas; and present steps'.
+  uint32_t patch_programs_[3] = {0, 0, 0}, present_program_ = 0;
   int32_t factor_location_[3] = {-1, -1, -1}, present_scale_location_ = -1;
   int32_t patch_size_location_[3] = {-1, -1, -1}, present_size_location_ = -1;  // u_target_size
   // The u_atlas of the programs that read one atlas ([1] magnified, [2] one atlas; [0] unused).

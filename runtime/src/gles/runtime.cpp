@@ -20,6 +20,9 @@ namespace {
 
 constexpr uint32_t kUnits = 8;  // atlas texture units per draw (GLES 3.0 guarantees 16)
 constexpr uint32_t kAccumulatorUnit = kUnits;  // where present steps read the accumulator
+// Runtime::patch_programs_: level-0 patches of any of kUnits atlases, magnified ones, level-0 ones
+// of one atlas.
+constexpr int kLevel0Program = 0, kMagnifiedProgram = 1, kOneAtlasProgram = 2;
 // dest corner 2, atlas corner 2, params 4, unit 1, atlas rectangle 4 (magnified patches only),
 // tint 3, second tint 3 (2-channel patches).
 constexpr uint32_t kFloatsPerVertex = 19;
@@ -175,9 +178,9 @@ class GlSink final : public DrawSink {
       if (run > end) run = end;
       // A run is all magnified or all level 0 (Runtime::open): one program for it, the
       // one-atlas program for level-0 patches that read one atlas.
-      const int k = pack::patch_level(r_.pack_.patch(first).flags) > 0 ? 1
-                    : r_.run_one_atlas_[first]                         ? 2
-                                                                       : 0;
+      const int k = pack::patch_level(r_.pack_.patch(first).flags) > 0 ? kMagnifiedProgram
+                    : r_.run_one_atlas_[first]                         ? kOneAtlasProgram
+                                                                       : kLevel0Program;
       use_patch_program(k);
       if (!factor_set[k]) {
         glUniform3f(r_.factor_location_[k], f[0], f[1], f[2]);
@@ -194,7 +197,7 @@ class GlSink final : public DrawSink {
         batch_ = int(batch);
       }
       // The programs that sample one atlas (a run of magnified patches has one): its unit.
-      if (k > 0 && int(atlas % kUnits) != unit_[k]) {
+      if (k != kLevel0Program && int(atlas % kUnits) != unit_[k]) {
         unit_[k] = int(atlas % kUnits);
         glUniform1i(r_.atlas_location_[k], unit_[k]);
       }
@@ -218,13 +221,10 @@ class GlSink final : public DrawSink {
 
  private:
   enum Mode { kNone, kDraw, kPresent };
-  // Patch program k (0: level-0 patches, 1: magnified ones, 2: level-0 patches of one atlas),
-  // its u_target_size the current target's.
+  // Patch program k (Runtime::patch_programs_), its u_target_size the current target's.
   void use_patch_program(int k) {
     if (program_ != k) {
-      glUseProgram(k == 1   ? r_.magnified_program_
-                   : k == 2 ? r_.one_atlas_program_
-                            : r_.patch_program_);
+      glUseProgram(r_.patch_programs_[k]);
       program_ = k;
     }
     if (sized_[k] != target_) {
@@ -273,8 +273,8 @@ class GlSink final : public DrawSink {
   Mode mode_ = kNone;
   uint8_t target_ = pack::kTargetLightMap;
   int batch_ = -1;
-  int program_ = -1;                       // the patch program in use (use_patch_program), or -1
-  int unit_[3] = {-1, -1, -1};             // the unit programs 1 and 2's u_atlas reads (-1: unset)
+  int program_ = -1;            // the patch program in use (use_patch_program), or -1
+  int unit_[3] = {-1, -1, -1};  // the unit the one-atlas programs' u_atlas reads (-1: unset)
   uint8_t sized_[3] = {0xFF, 0xFF, 0xFF};  // the target each patch program's size is set for
 };
 
@@ -458,28 +458,29 @@ Status Runtime::create_gl(Error* error) {
 
 Status Runtime::create_programs(Error* error) {
   const uint32_t w = pack_.lightmap_width(), h = pack_.lightmap_height();
-  patch_program_ = link(shaders::patch_vert, shaders::patch_frag, error);
-  if (!patch_program_) return Status::kGlError;
-  magnified_program_ = link(shaders::patch_vert, shaders::patch_magnified_frag, error);
-  if (!magnified_program_) return Status::kGlError;
-  one_atlas_program_ =
-      link(shaders::patch_vert, shaders::patch_frag, error, "#define LIGHTPATCH_ONE_ATLAS 1\n");
-  if (!one_atlas_program_) return Status::kGlError;
+  // The level-0 shader twice: branching on the patch's unit, and reading one atlas.
+  const char* fragments[3] = {shaders::patch_frag, shaders::patch_magnified_frag,
+                              shaders::patch_frag};
+  const char* defines[3] = {nullptr, nullptr, "#define LIGHTPATCH_ONE_ATLAS 1\n"};
+  for (int k = 0; k < 3; ++k) {
+    patch_programs_[k] = link(shaders::patch_vert, fragments[k], error, defines[k]);
+    if (!patch_programs_[k]) return Status::kGlError;
+  }
   present_program_ = link(shaders::present_vert, shaders::present_frag, error);
   if (!present_program_) return Status::kGlError;
   present_size_location_ = glGetUniformLocation(present_program_, "u_target_size");
-  const uint32_t patch_programs[3] = {patch_program_, magnified_program_, one_atlas_program_};
   for (int k = 0; k < 3; ++k) {
-    factor_location_[k] = glGetUniformLocation(patch_programs[k], "u_factor");
-    patch_size_location_[k] = glGetUniformLocation(patch_programs[k], "u_target_size");
-    glUseProgram(patch_programs[k]);
-    for (uint32_t u = 0; u < kUnits && k == 0; ++u) {
+    const uint32_t program = patch_programs_[k];
+    factor_location_[k] = glGetUniformLocation(program, "u_factor");
+    patch_size_location_[k] = glGetUniformLocation(program, "u_target_size");
+    glUseProgram(program);
+    for (uint32_t u = 0; u < kUnits && k == kLevel0Program; ++u) {
       char name[16];
       std::snprintf(name, sizeof name, "u_atlas[%u]", u);
-      glUniform1i(glGetUniformLocation(patch_programs[k], name), GLint(u));
+      glUniform1i(glGetUniformLocation(program, name), GLint(u));
     }
-    if (k > 0) {
-      atlas_location_[k] = glGetUniformLocation(patch_programs[k], "u_atlas");
+    if (k != kLevel0Program) {
+      atlas_location_[k] = glGetUniformLocation(program, "u_atlas");
       glUniform1i(atlas_location_[k], 0);
     }
     glUniform2f(patch_size_location_[k], float(w), float(h));
@@ -652,9 +653,8 @@ void Runtime::delete_gl() {
   if (vbo_) glDeleteBuffers(1, &vbo_);
   if (ibo_) glDeleteBuffers(1, &ibo_);
   if (vao_) glDeleteVertexArrays(1, &vao_);
-  if (patch_program_) glDeleteProgram(patch_program_);
-  if (magnified_program_) glDeleteProgram(magnified_program_);
-  if (one_atlas_program_) glDeleteProgram(one_atlas_program_);
+  for (uint32_t program : patch_programs_)
+    if (program) glDeleteProgram(program);
   if (present_program_) glDeleteProgram(present_program_);
   forget_gl();
 }
@@ -663,8 +663,8 @@ void Runtime::forget_gl() {
   if (atlas_textures_) std::memset(atlas_textures_, 0, sizeof(uint32_t) * pack_.atlas_count());
   light_map_ = accumulator_ = indirect_map_ = indirect_accumulator_ = 0;
   light_map_fbo_ = accumulator_fbo_ = indirect_map_fbo_ = indirect_accumulator_fbo_ = 0;
-  vbo_ = ibo_ = vao_ = patch_program_ = magnified_program_ = one_atlas_program_ = 0;
-  present_program_ = 0;
+  vbo_ = ibo_ = vao_ = present_program_ = 0;
+  for (uint32_t& program : patch_programs_) program = 0;
 }
 
 void Runtime::close() {
@@ -935,13 +935,13 @@ Status Runtime::draw_fill_floor(uint64_t texels, Error* error) {
   set_draw_state();
   glEnable(GL_BLEND);
   // The cheapest patch program: one fetch a texel.
-  glUseProgram(one_atlas_program_);
-  glUniform2f(patch_size_location_[2], float(width()), float(height()));
-  glUniform1i(atlas_location_[2], 0);
+  glUseProgram(patch_programs_[kOneAtlasProgram]);
+  glUniform2f(patch_size_location_[kOneAtlasProgram], float(width()), float(height()));
+  glUniform1i(atlas_location_[kOneAtlasProgram], 0);
   glBindFramebuffer(GL_FRAMEBUFFER, accumulator_fbo_);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, atlas_textures_[0]);
-  glUniform3f(factor_location_[2], 0.0f, 0.0f, 0.0f);
+  glUniform3f(factor_location_[kOneAtlasProgram], 0.0f, 0.0f, 0.0f);
   const void* quad =
       reinterpret_cast<const void*>(uintptr_t(pack_.patch_count()) * 6 * sizeof(uint32_t));
   for (uint64_t done = 0; done < texels; done += full) {
