@@ -71,14 +71,31 @@ std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Trace
       if (!texels.valid[t]) continue;
       TexelFootprint& f = out[t];
       const glm::vec3 origin = texels.position[t] + texels.normal[t] * eps;
+      // Whether static geometry stands between the sample point and the patch point at cell
+      // coordinates (i, j) (cell corners at whole numbers, centres at halves), within `reach` of
+      // the way: a corner on a wall's face (a cell that ends where the wall stands) is open.
+      auto blocked = [&](float i, float j, float reach) {
+        const float a = f.a0 + i / kFootprintCells * (f.a1 - f.a0);
+        const float b = f.b0 + j / kFootprintCells * (f.b1 - f.b0);
+        const glm::vec3 d = f.u * a + f.v * b;
+        const float len = glm::length(d);
+        return len > eps && tracer->intersect(origin, d / len, 0.0f, reach * len, false).hit;
+      };
+      // A cell is open when its centre and its four corners are: a cell that a wall only partly
+      // covers would put points inside the wall, whose rays travel inside solid geometry (inside
+      // a wall's slab, past a partition into the next room;
+      // Probes.TheSealedRoomStaysDarkInTheLampsMapAtEveryPreset).
+      constexpr int kCorners = kFootprintCells + 1;
+      bool corner[kCorners * kCorners];
+      for (int j = 0; j < kCorners; ++j)
+        for (int i = 0; i < kCorners; ++i)
+          corner[i + kCorners * j] = blocked(float(i), float(j), 0.99f);
       uint16_t open = 0;
       for (int j = 0; j < kFootprintCells; ++j) {
         for (int i = 0; i < kFootprintCells; ++i) {
-          const float a = f.a0 + (float(i) + 0.5f) / kFootprintCells * (f.a1 - f.a0);
-          const float b = f.b0 + (float(j) + 0.5f) / kFootprintCells * (f.b1 - f.b0);
-          const glm::vec3 d = f.u * a + f.v * b;
-          const float len = glm::length(d);
-          const bool closed = len > eps && tracer->intersect(origin, d / len, 0.0f, len, false).hit;
+          const bool closed = blocked(float(i) + 0.5f, float(j) + 0.5f, 1.0f) ||
+                              corner[i + kCorners * j] || corner[i + 1 + kCorners * j] ||
+                              corner[i + kCorners * (j + 1)] || corner[i + 1 + kCorners * (j + 1)];
           if (!closed) open |= uint16_t(1u << (i + kFootprintCells * j));
         }
       }

@@ -11,6 +11,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "lightpatch/cooker/texels.h"
@@ -19,15 +20,15 @@
 
 namespace lightpatch::cooker {
 
-// Points of the texel's surface patch: sample point + a u + b v, (a, b) in [a0, a1] x [b0, b1].
-// u and v step to the next texel along the page's x and y, in the surface's tangent plane; a
-// side without a neighbouring texel of the same surface (a chart's edge, or a neighbour pushed
-// out of solid geometry) is not entered (its bound is 0). The patch is cut in kFootprintCells x
-// kFootprintCells cells; `open` flags those in the open (bit i + kFootprintCells * j: cell i
-// along a, j along b): a cell behind static geometry standing on the surface (the part of a
-// wall's texel under a table, of a floor's under a wall) is no part of the visible surface and
-// is never sampled. The cook's direct light and gathering and the reference path tracer all
-// sample the same open cells, so they define a texel's light the same way.
+// Points of the texel's surface patch: sample point + a u + b v, (a, b) in [a0, a1] x [b0, b1]. u
+// and v step to the next texel along the page's x and y, in the surface's tangent plane; a side
+// without a neighbouring texel of the same surface (a chart's edge, or a neighbour pushed out of
+// solid geometry) is not entered (its bound is 0). The patch is cut in kFootprintCells x
+// kFootprintCells cells; `open` flags those in the open (bit i + kFootprintCells * j: cell i along
+// a, j along b): a cell behind static geometry standing on the surface (the part of a wall's texel
+// under a table, of a floor's under a wall), wholly or in part, is never sampled: some of its
+// points would lie inside that geometry. The cook's direct light and gathering and the reference
+// path tracer all sample the same open cells, so they define a texel's light the same way.
 constexpr int kFootprintCells = 4;
 struct TexelFootprint {
   glm::vec3 u{0.0f}, v{0.0f};
@@ -36,23 +37,18 @@ struct TexelFootprint {
 };
 
 // One footprint per texel (zero for invalid texels). With `tracer`, a cell is closed when a
-// static surface stands between the texel's sample point and the cell's centre (along the
-// surface, just above it: a wall standing on the floor, a table against the wall); semi-dynamic
-// objects do not close cells, so every state samples the same points. A texel with no open cell
-// keeps them all (its sample point is in the open: texel_builder.cpp pushes it out).
+// static surface stands between the texel's sample point and the cell's centre or one of its
+// corners (along the surface, just above it: a wall standing on the floor, a table against the
+// wall), so that no point of an open cell lies inside a wall; semi-dynamic objects do not close
+// cells, so every state samples the same points. A texel with no open cell keeps them all (its
+// sample point is in the open: texel_builder.cpp pushes it out).
 std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Tracer* tracer = nullptr,
                                              int threads = 1);
 
-// Point k of a spread of points over a footprint's open cells (the R2 low-discrepancy sequence,
-// rotated per texel by `rng`): the same points for the same (k, rng). Inline: a caller's loop
-// over k hashes `rng` once.
-inline glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k,
-                                 uint64_t rng) {
-  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
-  double a = hash_to_unit(rng) + kA1 * double(k + 1);
-  double b = hash_to_unit(sample_hash(rng, 1, 2, 3)) + kA2 * double(k + 1);
-  a -= std::floor(a);
-  b -= std::floor(b);
+// The point of a footprint's open part at (a, b) in [0, 1)^2: uniform (a, b) give points uniform
+// over the open cells.
+inline glm::vec3 footprint_point_at(const TexelFootprint& f, const glm::vec3& centre, double a,
+                                    double b) {
   if (f.open != 0xFFFF) {
     // a picks one of the open cells and its place along a within it: uniform over the open part.
     const int count = std::popcount(f.open);
@@ -64,6 +60,26 @@ inline glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centr
     b = (double(cell / kFootprintCells) + b) / kFootprintCells;
   }
   return centre + f.u * (f.a0 + float(a) * (f.a1 - f.a0)) + f.v * (f.b0 + float(b) * (f.b1 - f.b0));
+}
+
+// The rotation (Cranley-Patterson) of a texel's spread of points drawn from `rng`: the same two
+// offsets for every k of one (texel, rng).
+inline std::pair<double, double> footprint_rotation(uint64_t rng) {
+  return {hash_to_unit(rng), hash_to_unit(sample_hash(rng, 1, 2, 3))};
+}
+
+// Point k of a spread of points over a footprint's open cells (the R2 low-discrepancy sequence,
+// rotated per texel by `rng`): the same points for the same (k, rng). Inline: a caller's loop
+// over k hashes `rng` once. A caller that also draws a direction per point takes both from one
+// sequence of four dimensions instead (gather.cpp): this point's R2 and a direction's R2 of the
+// same k would tie each point to one direction.
+inline glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k,
+                                 uint64_t rng) {
+  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
+  const auto [a0, b0] = footprint_rotation(rng);
+  double a = a0 + kA1 * double(k + 1);
+  double b = b0 + kA2 * double(k + 1);
+  return footprint_point_at(f, centre, a - std::floor(a), b - std::floor(b));
 }
 
 }  // namespace lightpatch::cooker

@@ -109,8 +109,8 @@ struct CrossingHit {
 // its shadow): their first bounce reads the direct light at their hit points instead (solve.h),
 // one shadow ray per light each (the many hits of a texel average it). Only rays that cross no
 // semi-dynamic object before their hit are listed, so no state moves them. The rays of one coarse
-// texel that land on one texel keep at most kNearPerTexel hit points, spread over them in ray
-// order, each standing for `count` rays. Rays from a mesh that stops no ray (a flame, a bulb)
+// texel that land on one texel keep at most kNearPerTexel hit points, the first in ray order,
+// each standing for `count` rays. Rays from a mesh that stops no ray (a flame, a bulb)
 // keep the cache: such a texel lends its light to no other.
 // Chosen on the small inn (docs/accuracy.md, section (e)): within 0.5 spacings the gain was lost,
 // 2 added nothing to 1; one point for all of a texel's hits (their centroid, or the first) lost
