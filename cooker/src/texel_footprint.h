@@ -11,7 +11,6 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "lightpatch/cooker/texels.h"
@@ -62,12 +61,6 @@ inline glm::vec3 footprint_point_at(const TexelFootprint& f, const glm::vec3& ce
   return centre + f.u * (f.a0 + float(a) * (f.a1 - f.a0)) + f.v * (f.b0 + float(b) * (f.b1 - f.b0));
 }
 
-// The rotation (Cranley-Patterson) of a texel's spread of points drawn from `rng`: the same two
-// offsets for every k of one (texel, rng).
-inline std::pair<double, double> footprint_rotation(uint64_t rng) {
-  return {hash_to_unit(rng), hash_to_unit(sample_hash(rng, 1, 2, 3))};
-}
-
 // Point k of a spread of points over a footprint's open cells (the R2 low-discrepancy sequence,
 // rotated per texel by `rng`): the same points for the same (k, rng). Inline: a caller's loop
 // over k hashes `rng` once. A caller that also draws a direction per point takes both from one
@@ -75,11 +68,8 @@ inline std::pair<double, double> footprint_rotation(uint64_t rng) {
 // same k would tie each point to one direction.
 inline glm::vec3 footprint_point(const TexelFootprint& f, const glm::vec3& centre, int k,
                                  uint64_t rng) {
-  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
-  const auto [a0, b0] = footprint_rotation(rng);
-  double a = a0 + kA1 * double(k + 1);
-  double b = b0 + kA2 * double(k + 1);
-  return footprint_point_at(f, centre, a - std::floor(a), b - std::floor(b));
+  const auto [a0, b0] = rotation_of(rng);
+  return footprint_point_at(f, centre, kronecker(a0, kR2[0], k), kronecker(b0, kR2[1], k));
 }
 
 }  // namespace lightpatch::cooker

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "direct_light.h"
+#include "sample_hash.h"
 #include "worker_pool.h"
 
 namespace lightpatch::cooker {
@@ -371,15 +372,12 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   const float extent = 1.5f * (scene.scale() > 0.0f ? scene.scale() : 1.0f);
   const uint64_t rays0 = tracer.rays_traced();
   // Low-discrepancy directions per coarse texel: the R2 sequence, rotated per texel (Cranley-
-  // Patterson) so neighbours do not share a pattern.
-  constexpr double kA1 = 0.7548776662466927, kA2 = 0.5698402909980532;
-  // The points the rays leave from, over the texel's footprint: the last two dimensions of the
-  // R4 sequence (1/g^3, 1/g^4, g^5 = g + 1) with the same index, so that (point, direction) is one
-  // low-discrepancy sequence of four dimensions (these and R2's are rationally independent). A
-  // point from footprint_point's R2 of the same index made the direction a function of the
-  // point: the texel's estimate then missed most of its four dimensions and kept an error that
-  // did not fall with more rays (docs/accuracy.md, section (l)).
-  constexpr double kP1 = 0.6287067210378086, kP2 = 0.5385972572236101;
+  // Patterson) so neighbours do not share a pattern. The points the rays leave from, over the
+  // texel's footprint: R4's last two dimensions at the same index, so that (point, direction) is
+  // one low-discrepancy sequence of four dimensions (sample_hash.h). A point from
+  // footprint_point's R2 of the same index made the direction a function of the point: the
+  // texel's estimate then missed most of its four dimensions and kept an error that did not fall
+  // with more rays (docs/accuracy.md, section (l)).
   // Work items are block rows: each a contiguous range of coarse texels.
   std::vector<uint32_t> row_first(size_t(g.height) + 1, 0);
   for (int by = 0; by <= g.height; ++by)
@@ -408,21 +406,18 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   auto gather_ray = [&](uint32_t c, int k, double o1, double o2) {
     const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
     const uint32_t t = g.members[m0 + uint32_t(k) % mc];
-    double u = o1 + kA1 * double(k + 1), v = o2 + kA2 * double(k + 1);
-    u -= std::floor(u);
-    v -= std::floor(v);
+    const double u = kronecker(o1, kR2[0], k), v = kronecker(o2, kR2[1], k);
     const glm::vec3 n = texels.normal[t];
     glm::vec3 p = texels.position[t];
     if (options.footprints) {
-      const auto [r1, r2] = footprint_rotation(sample_hash(options.seed, t, 0x7061746368ull, 0));
-      double a = r1 + kP1 * double(k + 1), b = r2 + kP2 * double(k + 1);
-      p = footprint_point_at((*options.footprints)[t], p, a - std::floor(a), b - std::floor(b));
+      const auto [r1, r2] = rotation_of(sample_hash(options.seed, t, 0x7061746368ull, 0));
+      p = footprint_point_at((*options.footprints)[t], p, kronecker(r1, kR4Last[0], k),
+                             kronecker(r2, kR4Last[1], k));
     }
     return Ray{p + n * eps, eps, cosine_dir(n, float(u), float(v)), extent};
   };
   auto ray_offsets = [&](uint32_t c) {
-    const uint64_t hsh = sample_hash(options.seed, c, 0x6761746865ull, 0);
-    return std::pair<double, double>(hash_to_unit(hsh), hash_to_unit(sample_hash(hsh, 1, 2, 3)));
+    return rotation_of(sample_hash(options.seed, c, 0x6761746865ull, 0));
   };
   const bool objects = !scene.objects.empty();
   parallel_for(g.height, options.threads, [&](int by) {
