@@ -9,6 +9,7 @@
 
 #include "gl_program.h"
 #include "lightpatch/platform/gl.h"
+#include "view_culling.h"
 #include "world.h"
 
 namespace lightpatch::inn {
@@ -102,16 +103,37 @@ bool LanternShadow::init(const World& world, char* message, unsigned message_siz
 }
 
 void LanternShadow::update(uint32_t vao, glm::vec3 position, float far,
-                           const uint8_t* object_visible) {
+                           const uint8_t* object_visible, const glm::mat4& camera) {
+  triangles_ = 0;
   bool same = drawn_ && glm::distance(position, position_) < kRedrawDistance && far == far_;
   for (size_t o = 0; o < visible_.size() && same; ++o)
     same = (visible_[o] != 0) == (object_visible[o] != 0);
-  if (same) return;
-  drawn_ = true;
-  position_ = position;
-  far_ = far;
-  for (size_t o = 0; o < visible_.size(); ++o) visible_[o] = object_visible[o] ? 1 : 0;
-  ++redraws_;
+  if (!same) {
+    drawn_ = true;
+    position_ = position;
+    far_ = far;
+    for (size_t o = 0; o < visible_.size(); ++o) visible_[o] = object_visible[o] ? 1 : 0;
+    for (bool& f : fresh_) f = false;
+    ++redraws_;
+  }
+  // The faces the camera may look up: a fragment it sees reads the face its direction from the
+  // origin falls in (or, filtered, a few texels of the next face), out to the light's range,
+  // which may pass the far plane. So each face's pyramid, widened by kFaceMargin texels and out
+  // to kTestReach, against the camera's view; a face that misses it keeps what it holds, and is
+  // drawn (from the same origin) on the first frame it may be seen.
+  bool wanted[6] = {};
+  bool any = false;
+  const float widened = 1.0f + 2.0f * float(kFaceMargin) / float(kFaceSize);
+  const glm::mat4 test_projection =
+      glm::perspective(2.0f * std::atan(widened), 1.0f, kNear, kTestReach);
+  for (int f = 0; f < 6; ++f) {
+    if (fresh_[f]) continue;
+    const glm::mat4 face =
+        test_projection * glm::lookAt(position_, position_ + kFaceDirection[f], kFaceUp[f]);
+    wanted[f] = views_meet(camera, face);
+    any = any || wanted[f];
+  }
+  if (!any) return;
 
   GLint previous = 0, viewport[4] = {};
   glGetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
@@ -123,32 +145,33 @@ void LanternShadow::update(uint32_t vao, glm::vec3 position, float far,
   glDisable(GL_CULL_FACE);  // rooms are closed boxes seen from inside: both sides occlude
   glUseProgram(program_);
   glBindVertexArray(vao);
-  const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, kNear, far);
-  auto draw_range = [](const IndexRange& r) {
+  const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, kNear, far_);
+  auto draw_range = [this](const IndexRange& r) {
     if (r.count == 0) return;
+    triangles_ += r.count / 3;
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.count), GL_UNSIGNED_INT,
                    reinterpret_cast<const void*>(static_cast<size_t>(r.first) * sizeof(uint32_t)));
   };
   for (int f = 0; f < 6; ++f) {
+    if (!wanted[f]) continue;
+    fresh_[f] = true;
     glBindFramebuffer(GL_FRAMEBUFFER, framebuffers_[f]);
     glClear(GL_DEPTH_BUFFER_BIT);
     const glm::mat4 m =
-        projection * glm::lookAt(position, position + kFaceDirection[f], kFaceUp[f]);
+        projection * glm::lookAt(position_, position_ + kFaceDirection[f], kFaceUp[f]);
     glUniformMatrix4fv(face_matrix_location_, 1, GL_FALSE, glm::value_ptr(m));
     // The static chunks this face can see, consecutive ones in one draw.
-    IndexRange run{0, 0};
-    for (const WorldChunk& ch : world_->chunks) {
-      if (!face_sees(f, ch.bounds_min - position, ch.bounds_max - position, far)) continue;
-      if (run.count > 0 && run.first + run.count == ch.range.first) {
-        run.count += ch.range.count;
-        continue;
-      }
-      draw_range(run);
-      run = ch.range;
+    for_each_chunk_run(
+        *world_,
+        [&](const WorldChunk& ch) {
+          return face_sees(f, ch.bounds_min - position_, ch.bounds_max - position_, far_);
+        },
+        draw_range);
+    for (size_t o = 0; o < world_->objects.size(); ++o) {
+      const WorldObject& ob = world_->objects[o];
+      if (visible_[o] && face_sees(f, ob.bounds_min - position_, ob.bounds_max - position_, far_))
+        draw_range(ob.range);
     }
-    draw_range(run);
-    for (size_t o = 0; o < world_->objects.size(); ++o)
-      if (visible_[o]) draw_range(world_->objects[o].range);
   }
   glBindVertexArray(0);
   glUseProgram(0);

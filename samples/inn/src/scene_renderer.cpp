@@ -9,6 +9,7 @@
 
 #include "gl_program.h"
 #include "lightpatch/platform/gl.h"
+#include "view_culling.h"
 #include "world.h"
 
 namespace lightpatch::inn {
@@ -249,12 +250,13 @@ bool SceneRenderer::init(const World& world, char* message, unsigned message_siz
   return true;
 }
 
-void SceneRenderer::draw(const Frame& frame) {
+SceneRenderer::DrawStats SceneRenderer::draw(const Frame& frame) {
   const bool lantern = frame.lantern_factor != glm::vec3(0.0f);
   // The shadow reaches as far as the light (within LanternShadow::kReach).
   const float far =
       std::min(frame.lantern_range > 0.0f ? frame.lantern_range : 1.0e9f, LanternShadow::kReach);
-  if (lantern) shadow_.update(vao_, frame.lantern_position, far, frame.object_visible);
+  if (lantern)
+    shadow_.update(vao_, frame.lantern_position, far, frame.object_visible, frame.view_projection);
   glViewport(0, 0, frame.viewport_width, frame.viewport_height);
   glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
   glClearDepthf(1.0f);
@@ -294,14 +296,24 @@ void SceneRenderer::draw(const Frame& frame) {
               frame.lantern_range > 0.0f ? frame.lantern_range : 1.0e9f);
   glActiveTexture(GL_TEXTURE0);
   glBindVertexArray(vao_);
-  auto draw_range = [](const IndexRange& r) {
+  DrawStats stats;
+  auto draw_range = [&stats](const IndexRange& r) {
     if (r.count == 0) return;
+    stats.scene_triangles += r.count / 3;
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.count), GL_UNSIGNED_INT,
                    reinterpret_cast<const void*>(static_cast<size_t>(r.first) * sizeof(uint32_t)));
   };
-  draw_range(world_->static_range);
+  // The static chunks the camera can see, consecutive ones in one draw.
+  for_each_chunk_run(
+      *world_,
+      [&](const WorldChunk& ch) {
+        return box_in_view(frame.view_projection, ch.bounds_min, ch.bounds_max);
+      },
+      draw_range);
   for (size_t o = 0; o < world_->objects.size(); ++o) {
-    if (frame.object_visible[o]) draw_range(world_->objects[o].range);
+    const WorldObject& ob = world_->objects[o];
+    if (frame.object_visible[o] && box_in_view(frame.view_projection, ob.bounds_min, ob.bounds_max))
+      draw_range(ob.range);
   }
   if (frame.held_object >= 0 && static_cast<size_t>(frame.held_object) < world_->objects.size()) {
     glUseProgram(held_program_);
@@ -330,6 +342,8 @@ void SceneRenderer::draw(const Frame& frame) {
   glUseProgram(0);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
+  stats.shadow_triangles = shadow_.triangles_drawn();
+  return stats;
 }
 
 }  // namespace lightpatch::inn

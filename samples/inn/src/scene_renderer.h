@@ -61,8 +61,14 @@ class SceneRenderer {
     bool lantern_hidden = false;
     int viewport_width = 0, viewport_height = 0;
   };
-  // Draws into the currently bound framebuffer; clears it first.
-  void draw(const Frame& frame);
+  // What a draw() sent to the GPU, in triangles (deterministic for a frame: the budget's unit).
+  struct DrawStats {
+    uint64_t scene_triangles = 0;   // the camera's pass: the chunks and objects it can see
+    uint64_t shadow_triangles = 0;  // the lantern's cube faces, when they were drawn again
+  };
+  // Draws into the currently bound framebuffer; clears it first. The camera's pass draws only the
+  // static chunks and objects whose bounds meet its view (view_culling.h).
+  DrawStats draw(const Frame& frame);
 
  private:
   const World* world_ = nullptr;

@@ -35,8 +35,9 @@ struct FrameRecord {
   uint32_t draws = 0, pending = 0, oldest_pending_frames = 0, completed = 0, max_latency = 0;
   bool rebuild_active = false, presented = false;
   uint32_t flicker_updates = 0;
-  uint64_t probe_entries = 0;  // LightProbes::update()'s cost this frame
-  uint32_t probe_sets = 0;     // probe sets whose factor changed
+  uint64_t probe_entries = 0;      // LightProbes::update()'s cost this frame
+  uint32_t probe_sets = 0;         // probe sets whose factor changed
+  SceneRenderer::DrawStats drawn;  // triangles the frame's passes drew
 };
 
 struct StepRecord {
@@ -221,7 +222,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     f.held_model = held.model;
     f.held_sh = held.sh;
     light_lantern(game, s.world, rt.light_map_scale(), &f);
-    s.renderer.draw(f);
+    r.drawn = s.renderer.draw(f);
     s.overlay.draw(caption.c_str(), 10, 10, o.height >= 400 ? 2.0f : 1.0f, o.width, o.height);
     glFinish();
     const uint64_t t1 = platform::monotonic_ns();
@@ -493,15 +494,17 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
     f << "frame,step,total_ms,recompose_ms,render_ms,texels,draws,pending_changes,oldest_pending_"
          "frames,"
          "completed_changes,max_latency_frames,rebuild_active,presented,flicker_updates,probe_"
-         "entries,probe_sets_changed\n";
+         "entries,probe_sets_changed,scene_triangles,shadow_triangles\n";
     for (const FrameRecord& r : frames) {
       char row[320];
-      std::snprintf(
-          row, sizeof row,
-          "%" PRIu64 ",%s,%.3f,%.3f,%.3f,%" PRIu64 ",%u,%u,%u,%u,%u,%d,%d,%u,%" PRIu64 ",%u\n",
-          r.frame, r.step.c_str(), r.total_ms, r.recompose_ms, r.render_ms, r.texels, r.draws,
-          r.pending, r.oldest_pending_frames, r.completed, r.max_latency, r.rebuild_active ? 1 : 0,
-          r.presented ? 1 : 0, r.flicker_updates, r.probe_entries, r.probe_sets);
+      std::snprintf(row, sizeof row,
+                    "%" PRIu64 ",%s,%.3f,%.3f,%.3f,%" PRIu64 ",%u,%u,%u,%u,%u,%d,%d,%u,%" PRIu64
+                    ",%u,%" PRIu64 ",%" PRIu64 "\n",
+                    r.frame, r.step.c_str(), r.total_ms, r.recompose_ms, r.render_ms, r.texels,
+                    r.draws, r.pending, r.oldest_pending_frames, r.completed, r.max_latency,
+                    r.rebuild_active ? 1 : 0, r.presented ? 1 : 0, r.flicker_updates,
+                    r.probe_entries, r.probe_sets, r.drawn.scene_triangles,
+                    r.drawn.shadow_triangles);
       f << row;
     }
   }
@@ -531,7 +534,11 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
   std::vector<double> idle_total, busy_total, busy_recompose, flicker_recompose, render;
   uint64_t busy_texels = 0, probe_entries = 0, probe_entries_max = 0;
   uint32_t probe_sets_max = 0;
+  uint64_t scene_triangles = 0, shadow_triangles = 0, shadow_redraws = 0;
   for (const FrameRecord& r : frames) {
+    scene_triangles += r.drawn.scene_triangles;
+    shadow_triangles += r.drawn.shadow_triangles;
+    shadow_redraws += r.drawn.shadow_triangles > 0 ? 1 : 0;
     probe_entries += r.probe_entries;
     probe_entries_max = std::max(probe_entries_max, r.probe_entries);
     probe_sets_max = std::max(probe_sets_max, r.probe_sets);
@@ -573,6 +580,16 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           ? 0.0
           : static_cast<double>(busy_texels) / static_cast<double>(busy_recompose.size());
   summary["render_ms_mean"] = mean(render);
+  // Triangles drawn (the camera culls the world's chunks by its view, view_culling.h) against
+  // the world's static and object triangles: deterministic for a scenario.
+  const double frame_count = frames.empty() ? 1.0 : static_cast<double>(frames.size());
+  summary["triangles"] = {
+      {"world", s.world.indices.size() / 3},
+      {"scene_per_frame_mean", static_cast<double>(scene_triangles) / frame_count},
+      {"shadow_redraws", shadow_redraws},
+      {"shadow_per_redraw_mean",
+       shadow_redraws ? static_cast<double>(shadow_triangles) / static_cast<double>(shadow_redraws)
+                      : 0.0}};
   const double probe_entries_mean =
       frames.empty() ? 0.0
                      : static_cast<double>(probe_entries) / static_cast<double>(frames.size());

@@ -73,6 +73,23 @@ struct World {
   glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
 };
 
+// Calls draw(IndexRange) once for each run of consecutive static chunks that keep(chunk) accepts,
+// merged into one range: a pass that culls by chunk issues one draw per run, not per chunk.
+template <typename Keep, typename Draw>
+void for_each_chunk_run(const World& world, const Keep& keep, const Draw& draw) {
+  IndexRange run{0, 0};
+  for (const WorldChunk& ch : world.chunks) {
+    if (!keep(ch)) continue;
+    if (run.count > 0 && run.first + run.count == ch.range.first) {
+      run.count += ch.range.count;
+      continue;
+    }
+    if (run.count > 0) draw(run);
+    run = ch.range;
+  }
+  if (run.count > 0) draw(run);
+}
+
 // Builds the world. Throws std::runtime_error when the pack has no kMeshes section or does not
 // match the scene (a baked node or primitive missing, a source vertex out of range).
 World build_world(const GltfScene& scene, const PackView& pack);
