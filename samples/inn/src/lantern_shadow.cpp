@@ -114,7 +114,6 @@ void LanternShadow::update(uint32_t vao, glm::vec3 position, float far,
     far_ = far;
     for (size_t o = 0; o < visible_.size(); ++o) visible_[o] = object_visible[o] ? 1 : 0;
     for (bool& f : fresh_) f = false;
-    ++redraws_;
   }
   // The faces the camera may look up: a fragment it sees reads the face its direction from the
   // origin falls in (or, filtered, a few texels of the next face), out to the light's range,

@@ -57,8 +57,6 @@ class LanternShadow {
   // Where the faces were drawn from (world space, metres): the lookups' origin.
   glm::vec3 origin() const { return position_; }
   float far_plane() const { return far_; }
-  // Times the faces were drawn again from a new origin since init().
-  uint64_t redraws() const { return redraws_; }
   // Triangles the last update() drew (0 when it kept every face).
   uint64_t triangles_drawn() const { return triangles_; }
 
@@ -71,7 +69,6 @@ class LanternShadow {
   glm::vec3 position_{0.0f};
   float far_ = 0.0f;
   std::vector<uint8_t> visible_;  // object visibility at the last draw (sized in init())
-  uint64_t redraws_ = 0;
   uint64_t triangles_ = 0;
   bool fresh_[6] = {};  // the face holds the depths seen from position_
 };

@@ -61,7 +61,8 @@ class SceneRenderer {
     bool lantern_hidden = false;
     int viewport_width = 0, viewport_height = 0;
   };
-  // What a draw() sent to the GPU, in triangles (deterministic for a frame: the budget's unit).
+  // What a draw() sent to the GPU, in triangles: the same for a frame on every run, unlike its
+  // time.
   struct DrawStats {
     uint64_t scene_triangles = 0;   // the camera's pass: the chunks and objects it can see
     uint64_t shadow_triangles = 0;  // the lantern's cube faces, when they were drawn again

@@ -580,9 +580,10 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
           ? 0.0
           : static_cast<double>(busy_texels) / static_cast<double>(busy_recompose.size());
   summary["render_ms_mean"] = mean(render);
-  // Triangles drawn (the camera culls the world's chunks by its view, view_culling.h) against
-  // the world's static and object triangles: deterministic for a scenario.
   const double frame_count = frames.empty() ? 1.0 : static_cast<double>(frames.size());
+  // Triangles drawn (the camera culls the world's chunks by its view, view_culling.h) against
+  // the world's static and object triangles: deterministic for a scenario. A shadow redraw is a
+  // frame that drew any of the lantern's cube faces.
   summary["triangles"] = {
       {"world", s.world.indices.size() / 3},
       {"scene_per_frame_mean", static_cast<double>(scene_triangles) / frame_count},
@@ -590,9 +591,7 @@ int run_scripted(PlaySession& s, const PlayOptions& o) {
       {"shadow_per_redraw_mean",
        shadow_redraws ? static_cast<double>(shadow_triangles) / static_cast<double>(shadow_redraws)
                       : 0.0}};
-  const double probe_entries_mean =
-      frames.empty() ? 0.0
-                     : static_cast<double>(probe_entries) / static_cast<double>(frames.size());
+  const double probe_entries_mean = static_cast<double>(probe_entries) / frame_count;
   summary["light_probes"] = {{"probes", s.probes.probe_count()},
                              {"memory_bytes", s.probes.memory_bytes()},
                              {"entries_per_frame_mean", probe_entries_mean},

@@ -4,44 +4,58 @@
 // pixels.
 #pragma once
 
+#include <array>
 #include <cmath>
 
 #include <glm/glm.hpp>
 
 namespace lightpatch::inn {
 
+namespace view_culling_detail {
+
+// The six planes of a view-projection's clip volume (-w <= x, y, z <= w), as (normal, offset):
+// a point p is inside a plane where dot(normal, p) + offset >= 0. glm is column-major, so row r
+// of the matrix gives clip coordinate r.
+template <typename Mat>
+std::array<typename Mat::col_type, 6> clip_planes(const Mat& m) {
+  using V4 = typename Mat::col_type;
+  auto row = [&](int r) { return V4(m[0][r], m[1][r], m[2][r], m[3][r]); };
+  const V4 x = row(0), y = row(1), z = row(2), w = row(3);
+  return {w + x, w - x, w + y, w - y, w + z, w - z};
+}
+
+// Whether `point` lies outside `plane` by more than the rounding of the plane's sum, taken as
+// `tolerance` times the size of its terms.
+template <typename V4, typename V3>
+bool outside(const V4& plane, const V3& point, typename V3::value_type tolerance) {
+  const V3 t = V3(plane) * point;
+  const auto sum = t.x + t.y + t.z + plane.w;
+  const auto size = std::abs(t.x) + std::abs(t.y) + std::abs(t.z) + std::abs(plane.w);
+  return sum < -tolerance * size;
+}
+
+}  // namespace view_culling_detail
+
 // False only when no point of the box [lo, hi] (world space) lies inside the clip volume of
-// `view_projection` (-w <= x, y, z <= w): the box is wholly outside one of its six planes.
-// Conservative: a box outside the volume but not outside any one plane (near a corner of the
-// frustum) counts as visible, which costs a few triangles and never a missing one.
+// `view_projection`: the box is wholly outside one of its six planes. Conservative: a box outside
+// the volume but not outside any one plane (near a corner of the frustum) counts as visible,
+// which costs a few triangles and never a missing one.
 inline bool box_in_view(const glm::mat4& view_projection, glm::vec3 lo, glm::vec3 hi) {
-  // Row r of the matrix (glm is column-major): clip coordinate r = dot(row_r, (p, 1)).
-  auto row = [&](int r) {
-    return glm::vec4(view_projection[0][r], view_projection[1][r], view_projection[2][r],
-                     view_projection[3][r]);
-  };
-  const glm::vec4 x = row(0), y = row(1), z = row(2), w = row(3);
-  const glm::vec4 planes[6] = {w + x, w - x, w + y, w - y, w + z, w - z};
-  for (const glm::vec4& p : planes) {
+  for (const glm::vec4& p : view_culling_detail::clip_planes(view_projection)) {
     // The box's corner farthest along the plane's normal: if even it is outside, all are.
     const glm::vec3 far_corner(p.x >= 0.0f ? hi.x : lo.x, p.y >= 0.0f ? hi.y : lo.y,
                                p.z >= 0.0f ? hi.z : lo.z);
-    // Outside by more than float rounding of the sum (relative to its terms' size).
-    const glm::vec3 t = glm::vec3(p) * far_corner;
-    const float sum = t.x + t.y + t.z + p.w;
-    const float size = std::fabs(t.x) + std::fabs(t.y) + std::fabs(t.z) + std::fabs(p.w);
-    if (sum < -1.0e-5f * size) return false;
+    if (view_culling_detail::outside(p, far_corner, 1.0e-5f)) return false;
   }
   return true;
 }
 
 // False only when the clip volumes of two views have no point in common: the corners of one lie
 // wholly outside one of the other's six planes (either way round). Conservative as box_in_view:
-// volumes that miss each other across an edge may still count as meeting. Corners are computed
-// in double precision (a far plane hundreds of metres out inverts badly in float).
+// volumes that miss each other across an edge may still count as meeting. In double precision (a
+// far plane hundreds of metres out inverts badly in float).
 inline bool views_meet(const glm::mat4& a, const glm::mat4& b) {
   auto separated = [](const glm::mat4& planes_of, const glm::mat4& corners_of) {
-    const glm::dmat4 m(planes_of);
     const glm::dmat4 inverse = glm::inverse(glm::dmat4(corners_of));
     glm::dvec3 corner[8];
     for (int k = 0; k < 8; ++k) {
@@ -49,16 +63,10 @@ inline bool views_meet(const glm::mat4& a, const glm::mat4& b) {
           inverse * glm::dvec4(k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0, 1.0);
       corner[k] = glm::dvec3(c) / c.w;
     }
-    auto row = [&](int r) { return glm::dvec4(m[0][r], m[1][r], m[2][r], m[3][r]); };
-    const glm::dvec4 x = row(0), y = row(1), z = row(2), w = row(3);
-    const glm::dvec4 planes[6] = {w + x, w - x, w + y, w - y, w + z, w - z};
-    for (const glm::dvec4& p : planes) {
+    for (const glm::dvec4& p : view_culling_detail::clip_planes(glm::dmat4(planes_of))) {
       bool all_outside = true;
-      for (int k = 0; k < 8 && all_outside; ++k) {
-        const double v = glm::dot(glm::dvec3(p), corner[k]) + p.w;
-        const double size = glm::dot(glm::abs(glm::dvec3(p)), glm::abs(corner[k])) + std::fabs(p.w);
-        all_outside = v < -1.0e-9 * size;
-      }
+      for (int k = 0; k < 8 && all_outside; ++k)
+        all_outside = view_culling_detail::outside(p, corner[k], 1.0e-9);
       if (all_outside) return true;
     }
     return false;
