@@ -1,9 +1,9 @@
 // The `accuracy` verb (DESIGN.md, "Accuracy has a price tag"): sweeps the cook's quality knobs
-// (presets, gather rays, indirect level, denoising, area-light samples, texel density, encoding),
-// cooks the scene with each setting, recomposes the authored state from the pack on the CPU
-// reference and measures it against a reference bake of the same state (bake_state at several
-// times production's settings, cached on disk). Writes a CSV (one row per setting) and a PNG plot
-// of error against cook time with the Pareto front marked and the presets labelled. With
+// (presets, gather rays, indirect level, denoising, contact texels, area-light samples, texel
+// density, encoding), cooks the scene with each setting, recomposes the authored state from the
+// pack on the CPU reference and measures it against a reference bake of the same state (bake_state
+// at several times production's settings, cached on disk). Writes a CSV (one row per setting) and a
+// PNG plot of error against cook time with the Pareto front marked and the presets labelled. With
 // --runtime-csv, also the run-time side: one bake packed with each encoding and recomposed on
 // the CPU reference (and with --gles by the GLES runtime) against its float composition.
 #include <fcntl.h>
@@ -371,6 +371,11 @@ std::vector<Setting> make_sweep(const AccuracyOptions& o, bool has_area_lights, 
     x.bake.denoise = n;
     s.push_back(x);
   }
+  {
+    Setting x = turned(p, "contact_texels=on", "contact texels");
+    x.bake.contact_texels = true;
+    s.push_back(x);
+  }
   if (has_area_lights) {
     for (int n : {1, 4, 32, 64}) {
       Setting x = turned(p, "area_samples=" + std::to_string(n), "area samples");
@@ -407,6 +412,7 @@ bool same_bake(const Setting& a, const Setting& b) {
          gather_preset(a.bake).rays == gather_preset(b.bake).rays &&
          gather_preset(a.bake).level == gather_preset(b.bake).level &&
          gather_preset(a.bake).denoise == gather_preset(b.bake).denoise &&
+         a.bake.contact_texels == b.bake.contact_texels &&
          a.bake.area_samples == b.bake.area_samples && a.bake.seed == b.bake.seed &&
          a.bake.indirect == b.bake.indirect;
 }

@@ -84,6 +84,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
     o.bake.indirect_scale = std::stoi(scale);
   }
   o.bake.denoise = args.int_option("--denoise", -1, 0, 3);
+  o.bake.contact_texels = args.flag("--contact-texels");
   o.bake.area_samples = args.int_option("--area-samples", 0, 1, 65536);
   o.bake.texel_samples = args.int_option("--texel-samples", 0, 1, 256);
   o.bake.seed = static_cast<uint64_t>(args.int_option("--seed", 1, 0, 2'000'000'000));

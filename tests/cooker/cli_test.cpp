@@ -163,27 +163,13 @@ TEST(Cli, EveryVerbDocumentsItsOptions) {
     EXPECT_NE(help.out.find("usage: lightpatch"), std::string::npos) << help.out;
   }
   const ToolRun cook = expect_success({"cook", "--help"});
-  for (const char* option : {"--lightmap-size",
-                             "--texels-per-unit",
-                             "--quality",
-                             "--no-indirect",
-                             "--area-samples",
-                             "--texel-samples",
-                             "--seed",
-                             "--integrator",
-                             "--gather-rays",
-                             "--indirect-scale",
-                             "--denoise",
-                             "--threads",
-                             "--report",
-                             "--quiet",
-                             "--no-plan",
-                             "--measure-plan",
-                             "--panes",
-                             "--pane-level",
-                             "--max-patch-level",
-                             "--level-tolerance",
-                             "--bounce-tolerance"}) {
+  for (const char* option :
+       {"--lightmap-size",   "--texels-per-unit", "--quality",    "--no-indirect",
+        "--area-samples",    "--texel-samples",   "--seed",       "--integrator",
+        "--gather-rays",     "--indirect-scale",  "--denoise",    "--contact-texels",
+        "--threads",         "--report",          "--quiet",      "--no-plan",
+        "--measure-plan",    "--panes",           "--pane-level", "--max-patch-level",
+        "--level-tolerance", "--bounce-tolerance"}) {
     EXPECT_NE(cook.out.find(option), std::string::npos) << option << " undocumented:\n" << cook.out;
   }
   const ToolRun bake_state = expect_success({"bake-state", "--help"});

@@ -553,3 +553,95 @@ TEST(Denoise, NearFieldKeepsAContactGradientAndStaysLinear) {
 
 }  // namespace
 }  // namespace lightpatch::cooker
+
+namespace lightpatch::cooker {
+namespace {
+
+// Blocks that touch other geometry are split into coarse texels of one texel each (gather.h,
+// build_coarse_grid): the crate's foot and the floor around it, not the open floor. Such texels
+// are magnified as themselves and denoised among themselves; the grid is the same on any thread
+// count.
+TEST(CoarseGrid, BlocksThatTouchOtherGeometryGatherPerTexel) {
+  BoxRoom box;
+  // Texels of about 11 cm: blocks of 22 cm, whose probes reach 44 cm.
+  const test::Prepared f = test::prepare(box.scene, 256);
+  const TexelSet& tx = f.texels;
+  const CoarseGrid grid = build_coarse_grid(tx, 2, f.tracer.get(), 2, true);
+  const CoarseGrid same = build_coarse_grid(tx, 2, f.tracer.get(), 1, true);
+  const CoarseGrid blocks = build_coarse_grid(tx, 2, f.tracer.get(), 2, false);
+  ASSERT_EQ(grid.fine.size(), grid.size());
+  EXPECT_EQ(grid.coarse_of, same.coarse_of);
+  EXPECT_EQ(grid.fine, same.fine);
+  EXPECT_EQ(std::count(blocks.fine.begin(), blocks.fine.end(), 1), 0);
+  EXPECT_GT(grid.size(), blocks.size());
+  size_t foot = 0, foot_fine = 0, open = 0, open_fine = 0;
+  for (size_t t = 0; t < tx.valid.size(); ++t) {
+    if (!tx.valid[t]) continue;
+    const glm::vec3 q = tx.position[t], n = tx.normal[t];
+    const uint32_t c = grid.coarse_of[t];
+    ASSERT_NE(c, kNoTexel);
+    if (grid.fine[c]) {
+      EXPECT_EQ(grid.member_count(c), 1u);
+    }
+    // The crate's sides (x, z in -0.4..0.4) within 4 cm of the floor.
+    const bool crate_side =
+        std::fabs(n.y) < 0.1f && std::fabs(q.x) < 0.45f && std::fabs(q.z) < 0.45f && q.y < 0.04f;
+    // A patch of floor on the crate's far side from the stool, half a metre and more from every
+    // wall and the crate.
+    const bool open_floor =
+        n.y > 0.9f && q.y < 0.01f && q.x < -0.95f && q.x > -1.5f && q.z < -0.95f && q.z > -1.5f;
+    if (crate_side) foot_fine += grid.fine[c], ++foot;
+    if (open_floor) open_fine += grid.fine[c], ++open;
+  }
+  ASSERT_GT(foot, 8u);
+  ASSERT_GT(open, 8u);
+  EXPECT_EQ(foot_fine, foot) << "the crate's foot is gathered per texel";
+  EXPECT_EQ(open_fine, 0u) << "the open floor keeps its blocks";
+  // Magnified, a split texel is its own coarse texel's value; denoised, it reads only other
+  // split texels (here all 1, the rest 1000).
+  CoarseMap map(grid.size()), ones(grid.size());
+  for (size_t c = 0; c < grid.size(); ++c) {
+    map[c] = glm::vec3(float(c % 7), float(c % 5), 1.0f);
+    ones[c] = glm::vec3(grid.fine[c] ? 1.0f : 1000.0f);
+  }
+  CoarseMap filtered = ones;
+  denoise(grid, 2, filtered);
+  FloatImage fine(tx.width, tx.height, 3);
+  add_magnified(grid, tx, map, fine);
+  for (size_t t = 0; t < tx.valid.size(); ++t) {
+    const uint32_t c = tx.valid[t] ? grid.coarse_of[t] : kNoTexel;
+    if (c == kNoTexel || !grid.fine[c] || !grid.alive[c]) continue;
+    const int x = int(t % size_t(tx.width)), y = int(t / size_t(tx.width));
+    EXPECT_EQ(fine.at(x, y, 0), map[c].x);
+    EXPECT_EQ(fine.at(x, y, 1), map[c].y);
+    EXPECT_NEAR(filtered[c].x, 1.0f, 1e-5f);
+  }
+}
+
+// A split texel traces fine_ray_count() of the gather's rays; the others stay unused and out of
+// its weights, at every bounce level.
+TEST(CoarseGrid, SplitTexelsTraceTheirShareOfTheRays) {
+  BoxRoom box;
+  const test::Prepared f = test::prepare(box.scene, 64);
+  GatherOptions go;
+  go.rays = 64;
+  go.threads = 2;
+  go.split_contacts = true;
+  const GatherOperator op = build_gather(box.scene, f.layout, f.texels, *f.tracer, 2, go);
+  const int fine_rays = fine_ray_count(op.rays);
+  ASSERT_LT(fine_rays, op.rays);
+  size_t fine = 0;
+  for (uint32_t c = 0; c < op.grid.size(); ++c) {
+    const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
+    const int traced = op.grid.fine[c] ? fine_rays : op.rays;
+    for (int k = traced; k < op.rays; ++k) ASSERT_EQ(hits[k], kNoTexel) << c;
+    if (!op.grid.fine[c] || !op.grid.alive[c]) continue;
+    ++fine;
+    for (int l = 0; l < GatherOperator::kLevels; ++l)
+      EXPECT_EQ(op.weight[l][c], 1.0f / float(std::min(traced, op.level_rays[l]))) << c;
+  }
+  EXPECT_GT(fine, 0u);
+}
+
+}  // namespace
+}  // namespace lightpatch::cooker

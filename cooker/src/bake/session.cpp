@@ -59,6 +59,7 @@ GatherPreset gather_preset(const BakeOptions& options) {
   if (options.gather_rays > 0) p.rays = options.gather_rays;
   if (options.indirect_scale > 0) p.level = options.indirect_scale;
   if (options.denoise >= 0) p.denoise = options.denoise;
+  p.contact_texels = options.contact_texels;
   return p;
 }
 

@@ -14,14 +14,14 @@ namespace lightpatch::cooker {
 static_assert(std::endian::native == std::endian::little, "the format is little-endian");
 // Every field of the operator is written below: a field added to gather.h must be added here
 // (and the version bumped), or a loaded operator would lack it.
-// (Sizes on 64-bit libstdc++: 3 ints and 12 vectors; the grid and 21 more fields.)
-static_assert(sizeof(CoarseGrid) == 304, "CoarseGrid changed: update gather_file.cpp");
-static_assert(sizeof(GatherOperator) == 672, "GatherOperator changed: update gather_file.cpp");
+// (Sizes on 64-bit libstdc++: 3 ints and 13 vectors; the grid and 21 more fields.)
+static_assert(sizeof(CoarseGrid) == 328, "CoarseGrid changed: update gather_file.cpp");
+static_assert(sizeof(GatherOperator) == 696, "GatherOperator changed: update gather_file.cpp");
 
 namespace {
 
 constexpr char kMagic[8] = {'L', 'P', 'G', 'A', 'T', 'H', 'E', 'R'};
-constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersion = 3;
 
 struct GatherScalars {
   int32_t level, width, height, rays, tiles_x, tiles_y;
@@ -206,6 +206,7 @@ std::vector<uint8_t> encode_gather(const GatherOperator& op, const std::array<ui
   w.array(g.normal);
   w.array(g.albedo);
   w.array(g.links);
+  w.array(g.fine);
   w.array(g.alive);
   w.packed(op.hit, uint32_t(g.size()));
   for (const std::vector<float>& weight : op.weight) w.array(weight);
@@ -301,6 +302,7 @@ GatherOperator decode_gather(const uint8_t* data, size_t size, const GatherFileE
   g.normal = in.array<glm::vec3>("normal", nc);
   g.albedo = in.array<glm::vec3>("albedo", nc);
   g.links = in.array<uint32_t>("links", nc * CoarseGrid::kLinks);
+  g.fine = in.array<uint8_t>("fine", nc);
   g.alive = in.array<uint8_t>("alive", nc);
   check_indices(g.coarse_of, nc, true, "coarse_of");
   check_offsets(g.member_offset, g.members.size(), "member_offset");
@@ -314,6 +316,8 @@ GatherOperator decode_gather(const uint8_t* data, size_t size, const GatherFileE
   check_finite(g.albedo, "albedo");
   for (uint8_t a : g.alive)
     if (a > 1) throw CookError("gather file: bad value in alive");
+  for (uint8_t f : g.fine)
+    if (f > 1) throw CookError("gather file: bad value in fine");
 
   op.hit = in.packed("hit", nc * uint64_t(s.rays), uint32_t(nc));
   for (std::vector<float>& weight : op.weight) {

@@ -2,7 +2,7 @@
 // and every light-group job of the same scene, layout and options loads it instead of tracing
 // it again (job_dir.h).
 //
-// Format version 2 (1 had no near hits), little-endian:
+// Format version 3 (2 had no per-texel coarse texels, `fine`; 1 no near hits), little-endian:
 //   header (64 bytes, GatherFileHeader): magic, version, header size, file size, the job's hash,
 //     the crc (CRC-32 of the whole file read with the crc field as zero), the counts the file was
 //     traced for (texels, objects, coarse texels, rays per coarse texel)

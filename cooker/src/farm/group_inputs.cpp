@@ -185,6 +185,7 @@ JobDigests job_input_digests(const PreparedScene& p, const BakeContext& b, const
   common.value(gp.rays);
   common.value(gp.level);
   common.value(gp.denoise);
+  common.value(gp.contact_texels);
   common.value(o.plan_effects);
   common.value(p.texels.width);
   common.value(p.texels.height);

@@ -89,6 +89,7 @@ json settings_json(const CookSettings& s) {
           {"gather_rays", b.gather_rays},
           {"indirect_scale", b.indirect_scale},
           {"denoise", b.denoise},
+          {"contact_texels", b.contact_texels},
           {"plan_effects", b.plan_effects},
           {"output_step", b.output_step},
           {"probes", b.probes.enabled},
@@ -154,6 +155,7 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   s.bake.gather_rays = int_field(j, "gather_rays", 0, 65536, file);
   s.bake.indirect_scale = int_field(j, "indirect_scale", 0, 8, file);
   s.bake.denoise = int_field(j, "denoise", -1, 3, file);
+  s.bake.contact_texels = field<bool>(j, "contact_texels", file);
   s.bake.plan_effects = field<bool>(j, "plan_effects", file);
   s.bake.output_step = field<float>(j, "output_step", file);
   if (!(s.bake.output_step >= 0.0f && s.bake.output_step <= 1e30f))

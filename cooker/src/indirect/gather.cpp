@@ -29,6 +29,20 @@ constexpr float kBuriedFraction = 0.1f;
 constexpr uint32_t kBackFace = 0xFFFFFFFEu;
 // The fewest rays a coarse texel gathers with in the series' later bounces.
 constexpr int kMinLevelRays = 16;
+// block_touches(): how far its probes reach (blocks), how many leave each texel, and the share
+// of them that must be blocked. Chosen on the test room at preview (docs/accuracy.md, section
+// (m)): 0.5 and 1 block, or a share of 0.2, split fewer blocks and left more of the blur.
+static const float kContactReach = getenv("LP_CR") ? float(atof(getenv("LP_CR"))) : 2.0f;
+constexpr int kContactProbes = 8;
+static const float kContactFraction = getenv("LP_CF") ? float(atof(getenv("LP_CF"))) : 0.1f;
+// Only 2x2 blocks split (preview's; production gathers per texel): a 4x4 block split is 16
+// gathers for one, which would undo what draft's and the coarser indirect maps' blocks save.
+constexpr int kContactLevel = 2;
+// A split texel traces 1/kFineRayDivisor of a coarse texel's rays (fine_ray_count): a split 2x2
+// block costs two blocks. Chosen on the test room, the thin panel and the small inn at preview
+// (docs/accuracy.md, section (m)): all the rays cost twice as much for no gain on the inn, a
+// quarter gained less on the inn than it cost in noise.
+constexpr int kFineRayDivisor = 2;
 
 // Union-find over fine texels: charts are the connected valid texels of one region.
 struct Charts {
@@ -227,9 +241,52 @@ bool surfaces_see(const Tracer& tracer, const glm::vec3& pa, const glm::vec3& na
   return !tracer.occluded_static(a, d / len, eps, len - eps);
 }
 
+// Whether a block's texels have other geometry within kContactReach blocks: a crate's side where
+// it stands on the floor, a wall behind a thin panel. There bounce light changes within a block
+// (the floor in front of the crate lies in its shadow), which one value per block and its
+// magnification blur into a bright band. kContactProbes short any-hit rays per texel, cosine-
+// distributed, through static geometry and every object (the grid is one for every state);
+// the block touches when at least kContactFraction of them are blocked.
+bool block_touches(const Tracer& tracer, const TexelSet& texels,
+                   const std::vector<uint32_t>& chart_of, const std::vector<uint32_t>& block, int k,
+                   std::vector<Ray>& probes, std::vector<uint8_t>& blocked) {
+  // The block's texel spacing: the largest gap between one of its texels and the next one of
+  // the same chart in the page, across or down.
+  float spacing = 0.0f;
+  for (uint32_t a : block) {
+    const size_t x = a % size_t(texels.width);
+    for (const size_t b : {size_t(a) + 1, size_t(a) + size_t(texels.width)}) {
+      if (b >= texels.valid.size() || (b == size_t(a) + 1 && x + 1 == size_t(texels.width)) ||
+          !texels.valid[b] || chart_of[b] != chart_of[a])
+        continue;
+      spacing = std::max(spacing, glm::length(texels.position[a] - texels.position[b]));
+    }
+  }
+  if (!(spacing > 0.0f)) return false;
+  const float eps = tracer.epsilon();
+  const float reach = kContactReach * float(k) * spacing;
+  if (!(reach > 2.0f * eps)) return false;
+  probes.clear();
+  for (uint32_t t : block) {
+    const auto [o1, o2] = rotation_of(sample_hash(0x636f6e74616374ull, t, 0, 0));
+    const glm::vec3 n = texels.normal[t];
+    for (int i = 0; i < kContactProbes; ++i) {
+      const glm::vec3 d =
+          cosine_dir(n, float(kronecker(o1, kR2[0], i)), float(kronecker(o2, kR2[1], i)));
+      probes.push_back(Ray{texels.position[t] + n * eps, eps, d, reach});
+    }
+  }
+  blocked.resize(probes.size());
+  tracer.occluded_many(probes.data(), int(probes.size()), blocked.data());
+  size_t hits = 0;
+  for (uint8_t b : blocked) hits += b;
+  return float(hits) >= kContactFraction * float(probes.size());
+}
+
 }  // namespace
 
-CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads) {
+CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads,
+                             bool split_contacts) {
   auto sees = [&](const glm::vec3& pa, const glm::vec3& na, const glm::vec3& pb,
                   const glm::vec3& nb) { return !tracer || surfaces_see(*tracer, pa, na, pb, nb); };
   CoarseGrid g;
@@ -256,11 +313,15 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
   std::vector<uint32_t> chart_of(n);
   for (size_t t = 0; t < n; ++t) chart_of[t] = charts.find(uint32_t(t));
   // Greedy clusters per block, block rows in parallel: a texel joins the first coarse texel of
-  // its chart whose seed normal is within the cone and which it sees, else seeds a new one.
+  // its chart whose seed normal is within the cone and which it sees, else seeds a new one. In a
+  // block that touches other geometry (block_touches), every texel is a coarse texel of its own.
   std::vector<std::vector<std::vector<uint32_t>>> row_groups(size_t(g.height));
   std::vector<std::vector<uint32_t>> row_group_block(size_t(g.height));
+  std::vector<std::vector<uint8_t>> row_group_fine(size_t(g.height));
   parallel_for(g.height, threads, [&](int by) {
     std::vector<uint32_t> block, seeds;
+    std::vector<Ray> probes;
+    std::vector<uint8_t> blocked;
     for (int bx = 0; bx < g.width; ++bx) {
       block.clear();
       for (int y = by * k; y < std::min(h, (by + 1) * k); ++y)
@@ -268,8 +329,11 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
           if (texels.valid[texels.index(x, y)]) block.push_back(uint32_t(texels.index(x, y)));
       seeds.clear();
       const size_t first = row_groups[size_t(by)].size();
+      const bool split = k == kContactLevel && tracer && split_contacts && !block.empty() &&
+                         block_touches(*tracer, texels, chart_of, block, k, probes, blocked);
       for (uint32_t t : block) {
         size_t j = 0;
+        if (split) j = seeds.size();
         for (; j < seeds.size(); ++j) {
           const uint32_t sd = seeds[j];
           if (chart_of[sd] == chart_of[t] &&
@@ -282,6 +346,7 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
           row_groups[size_t(by)].emplace_back();
           row_group_block[size_t(by)].push_back(
               uint32_t(size_t(by) * size_t(g.width) + size_t(bx)));
+          row_group_fine[size_t(by)].push_back(split ? 1 : 0);
         }
         row_groups[size_t(by)][first + j].push_back(t);
       }
@@ -309,6 +374,7 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
       g.member_offset.push_back(uint32_t(g.members.size()));
       g.block_of.push_back(b);
       g.block_coarse.push_back(c);
+      g.fine.push_back(row_group_fine[size_t(by)][i]);
       g.chart.push_back(chart_of[grp.front()]);
       g.position.push_back(p / m);
       const float len = glm::length(nn);
@@ -335,13 +401,21 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
             const int nx = bx + dx * step, ny = by + dy * step;
             if (nx < 0 || ny < 0 || nx >= g.width || ny >= g.height) continue;
             const size_t nb = size_t(ny) * size_t(g.width) + size_t(nx);
+            // Of a split block's texels, the nearest within the cone continues the surface (its
+            // mean normal alone would pick one at random on a flat one).
             uint32_t best = kNoTexel;
-            float best_cos = kSameSurfaceCos;
+            float best_cos = kSameSurfaceCos, best_d2 = std::numeric_limits<float>::max();
             for (uint32_t i = g.block_offset[nb]; i < g.block_offset[nb + 1]; ++i) {
               const uint32_t q = g.block_coarse[i];
               if (g.chart[q] != g.chart[c]) continue;
               const float d = glm::dot(g.normal[q], g.normal[c]);
-              if (d >= best_cos) {
+              if (g.fine[q]) {
+                const glm::vec3 e = g.position[q] - g.position[c];
+                if (d >= kSameSurfaceCos && glm::dot(e, e) < best_d2) {
+                  best_d2 = glm::dot(e, e);
+                  best = q;
+                }
+              } else if (d >= best_cos) {
                 best_cos = d;
                 best = q;
               }
@@ -359,10 +433,16 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
   return g;
 }
 
+int fine_ray_count(int rays) {
+  return std::min(rays, std::max(kMinLevelRays, rays / (getenv("LP_FR") ? atoi(getenv("LP_FR"))
+                                                                        : kFineRayDivisor)));
+}
+
 GatherOperator build_gather(const Scene& scene, const Layout& layout, const TexelSet& texels,
                             const Tracer& tracer, int level, const GatherOptions& options) {
   GatherOperator op;
-  op.grid = build_coarse_grid(texels, level, &tracer, options.threads);
+  const uint64_t rays0 = tracer.rays_traced();  // the grid's probes and sight lines included
+  op.grid = build_coarse_grid(texels, level, &tracer, options.threads, options.split_contacts);
   const CoarseGrid& g = op.grid;
   const size_t nc = g.size();
   const int n_rays = std::max(1, options.rays);
@@ -370,7 +450,6 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   op.hit.assign(nc * size_t(n_rays), kNoTexel);
   const float eps = tracer.epsilon();
   const float extent = 1.5f * (scene.scale() > 0.0f ? scene.scale() : 1.0f);
-  const uint64_t rays0 = tracer.rays_traced();
   // Low-discrepancy directions per coarse texel: the R2 sequence, rotated per texel (Cranley-
   // Patterson) so neighbours do not share a pattern. The points the rays leave from, over the
   // texel's footprint: R4's last two dimensions at the same index, so that (point, direction) is
@@ -419,6 +498,10 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   auto ray_offsets = [&](uint32_t c) {
     return rotation_of(sample_hash(options.seed, c, 0x6761746865ull, 0));
   };
+  // A texel split from a block at a contact traces the first rays_of(c) of its rays; the rest
+  // stay unused (kNoTexel, out of its weights).
+  const int fine_rays = fine_ray_count(n_rays);
+  auto rays_of = [&](uint32_t c) { return g.fine[c] ? fine_rays : n_rays; };
   const bool objects = !scene.objects.empty();
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
@@ -435,12 +518,16 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
       const auto [o1, o2] = ray_offsets(c);
       uint32_t crossings_here = 0;
+      const int traced = rays_of(c);
       // One texel's rays leave a few nearby points: coherent, so they are traced as packets,
       // first through static geometry, then each up to its static hit through the objects alone
       // (a scene of their own, small). Tracing on through the whole scene after each object hit
       // cost a semi-dynamic cook's gather a third more than a static one's, and lost the static
       // surface an object rests on (the floor under a crate, hit where the crate's bottom is).
-      for (int k = 0; k < n_rays; ++k) rays[size_t(k)] = gather_ray(c, k, o1, o2);
+      for (int k = 0; k < n_rays; ++k) {
+        rays[size_t(k)] = gather_ray(c, k, o1, o2);
+        if (k >= traced) rays[size_t(k)].tmax = rays[size_t(k)].tmin;  // skipped, not counted
+      }
       tracer.intersect_many(rays.data(), n_rays, first.data(), false);
       if (objects) {
         for (int k = 0; k < n_rays; ++k) {
@@ -459,6 +546,10 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         }
       }
       for (int k = 0; k < n_rays; ++k) {
+        if (k >= traced) {
+          op.hit[size_t(c) * size_t(n_rays) + size_t(k)] = kNoTexel;
+          continue;
+        }
         const glm::vec3 origin = rays[size_t(k)].origin, dir = rays[size_t(k)].dir;
         Crossing rec{uint32_t(k), uint32_t(ch.size()), 0};
         const Hit& s = first[size_t(k)];
@@ -499,7 +590,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       // Near rays merged now, while they are one texel's: kept ray by ray, production's ran to
       // gigabytes on the full inn.
       if (!near_rays.empty()) {
-        buried_members(op.hit.data() + size_t(c) * size_t(n_rays), n_rays, mc, back, total,
+        buried_members(op.hit.data() + size_t(c) * size_t(n_rays), traced, mc, back, total,
                        member_buried);
         add_near_hits(c, near_rays, member_buried, mc, order, near);
         near_rays.clear();
@@ -513,7 +604,8 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<uint8_t> member_buried;
     for (size_t c = size_t(item) * 256; c < std::min(nc, size_t(item + 1) * 256); ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(uint32_t(c));
-      buried_members(op.hit.data() + c * size_t(n_rays), n_rays, mc, back, total, member_buried);
+      buried_members(op.hit.data() + c * size_t(n_rays), rays_of(uint32_t(c)), mc, back, total,
+                     member_buried);
       for (uint32_t m = 0; m < mc; ++m)
         if (member_buried[m]) buried[g.members[m0 + m]] = 1;
     }
@@ -587,8 +679,9 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       const auto [o1, o2] = ray_offsets(c);
       uint32_t used[GatherOperator::kLevels] = {0, 0, 0};
       uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
+      const int traced = rays_of(c);
       for (int k = 0; k < n_rays; ++k) {
-        const bool drop = buried[g.members[m0 + uint32_t(k) % mc]] != 0;
+        const bool drop = k >= traced || buried[g.members[m0 + uint32_t(k) % mc]] != 0;
         const uint32_t f = hits[k];
         if (drop)
           hits[k] = kNoTexel;

@@ -1,6 +1,7 @@
 // Final gathering for indirect light (the production integrator). Indirect light is smooth, so it
 // is computed on coarse texels: the texels of one chart in one k x k block of the light map (k =
-// the indirect level: 1, 2, 4 or 8), split further where normals differ. From every coarse texel
+// the indirect level: 1, 2, 4 or 8), split further where normals differ, and into single texels
+// where a 2x2 block touches other geometry (build_coarse_grid). From every coarse texel
 // N cosine-distributed rays leave its member texels; each is traced once through static geometry
 // and once through the semi-dynamic objects alone, up to its static hit (the objects it crosses
 // and where), and what it hits is kept as a coarse texel index (the radiance cache is the light map
@@ -71,6 +72,9 @@ struct CoarseGrid {
   static constexpr int kLinkSteps = 3;
   static constexpr int kLinks = kLinkSteps * 8;
   std::vector<uint32_t> links;
+  // 1 for a coarse texel of one texel, split from a block that touches other geometry
+  // (build_coarse_grid): the magnification gives that texel its own value.
+  std::vector<uint8_t> fine;
   // 0 for a coarse texel whose members are all buried in solid geometry (gather.cpp): it has no
   // value of its own, and neighbours do not read it.
   std::vector<uint8_t> alive;
@@ -88,8 +92,13 @@ struct CoarseGrid {
 
 // Groups the valid texels into coarse texels of level k (1, 2, 4 or 8): per block, by chart, by
 // normal, and by line of sight (`tracer`, may be null in tests: a floor texel beyond a wall that
-// stands on it is not grouped with the floor inside), and links the neighbours.
-CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads);
+// stands on it is not grouped with the floor inside), and links the neighbours. With
+// `split_contacts` and a tracer, a 2x2 block with other geometry within two blocks of its
+// texels (short probe rays, static geometry and every object) gives each texel a coarse texel of
+// its own (`fine`): at a crate's foot bounce light changes within a block, and one value per block
+// blurred it (docs/accuracy.md, section (m)).
+CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tracer, int threads,
+                             bool split_contacts = false);
 
 // A ray that crosses semi-dynamic objects before its static hit: what it hits in each.
 struct Crossing {
@@ -132,6 +141,8 @@ struct GatherOptions {
   // (texel_footprint.h), as the direct light and the reference path tracer sample it; null: the
   // texel's sample point (one texel sample, draft).
   const std::vector<TexelFootprint>* footprints = nullptr;
+  // 2x2 blocks that touch other geometry gather per texel (build_coarse_grid).
+  bool split_contacts = false;
 };
 
 struct GatherOperator {
@@ -170,6 +181,10 @@ struct GatherOperator {
   std::vector<std::vector<uint32_t>> sources;      // tile -> source tiles (sorted, unique)
   uint64_t rays_traced = 0;
 };
+
+// The rays a coarse texel split at a contact (CoarseGrid::fine) traces of the `rays` of every
+// other: half (at least 16), so that a split 2x2 block costs two blocks' rays.
+int fine_ray_count(int rays);
 
 // Traces every coarse texel's gather rays. `layout` maps hits to light-map texels.
 GatherOperator build_gather(const Scene& scene, const Layout& layout, const TexelSet& texels,

@@ -91,6 +91,7 @@ class GatherIntegrator final : public IndirectIntegrator {
       go.rays = preset_.rays;
       go.seed = b.options.seed;
       go.threads = b.threads;
+      go.split_contacts = preset_.contact_texels;
       if (!b.footprints.empty()) go.footprints = &b.footprints;
       op_ = build_gather(b.scene, b.layout, b.texels, b.tracer, preset_.level, go);
       report.stage_time("bake.gather_rays", progress.end());
@@ -193,8 +194,10 @@ class GatherIntegrator final : public IndirectIntegrator {
         {"rays_per_coarse_texel", preset_.rays},
         {"rays_per_bounce", {op_.level_rays[0], op_.level_rays[1], op_.level_rays[2]}},
         {"denoise_passes", preset_.denoise},
+        {"contact_texels_option", preset_.contact_texels},
         {"indirect_map_scale", b_.layout.align},
         {"coarse_texels", op_.grid.size()},
+        {"contact_texels", size_t(std::count(op_.grid.fine.begin(), op_.grid.fine.end(), 1))},
         {"buried_texels", op_.buried_texels},
         {"gather_rays", op_.rays_traced},
         {"crossings", op_.crossings.size()},

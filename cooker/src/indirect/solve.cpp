@@ -161,6 +161,8 @@ void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
   using V4 = float __attribute__((vector_size(16)));
   constexpr size_t kStride = stride_of(K), kVectors = kStride / 4;
   const int n = op.level_rays[level];
+  // A texel split at a contact traced a prefix of its rays; the rest are kNoTexel.
+  const int n_fine = std::min(n, fine_ray_count(op.rays));
   const std::vector<float>& weight = op.weight[level];
   const int items = int((receivers.size() + kChunk - 1) / kChunk);
   auto at = [&](uint32_t c, size_t j) {
@@ -180,7 +182,8 @@ void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
       const uint32_t c = receivers[i];
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       V4 acc[kVectors] = {};  // registers: the sum of every source at once
-      for (int k = 0; k < n; ++k) {
+      const int rays = op.grid.fine[c] ? n_fine : n;
+      for (int k = 0; k < rays; ++k) {
         if (hits[k] == kNoTexel) continue;
         const float* v = src + size_t(hits[k]) * kStride;
 #pragma GCC unroll 8
@@ -440,7 +443,8 @@ GatherReach gather_reach(const GatherOperator& op, int threads) {
     for (uint32_t c = uint32_t(item * per_item); c < end; ++c) {
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       uint32_t rec = op.crossing_offset[c];
-      for (int k = 0; k < op.rays; ++k) {
+      const int rays = op.grid.fine[c] ? fine_ray_count(op.rays) : op.rays;
+      for (int k = 0; k < rays; ++k) {
         const uint32_t cls = class_of(k);
         auto add = [&](uint32_t coarse) {
           if (coarse == kNoTexel) return;
@@ -694,7 +698,8 @@ std::vector<float> near_field(const GatherOperator& op) {
       if (h >= grid.size()) continue;  // a miss or the back of a surface: far
       sum += std::exp(-glm::length(grid.position[h] - grid.position[c]) / reach);
     }
-    out[c] = sum / float(op.rays);
+    // A split texel traced fewer rays (gather.h fine_ray_count): the mean over those.
+    out[c] = grid.fine[c] ? sum * op.weight[0][c] : sum / float(op.rays);
   }
   return out;
 }
@@ -733,6 +738,9 @@ DenoiseWeights denoise_weights(const CoarseGrid& grid, int levels, const std::ve
         for (int dx = -1; dx <= 1; ++dx) {
           const uint32_t q = dx == 0 && dy == 0 ? c : grid.link(c, level, dx, dy);
           if (q == kNoTexel || !grid.alive[q]) continue;
+          // A texel split from a block at a contact reads only other such texels: filtered with
+          // the open surface beside it, it lost the contact again.
+          if (q != c && grid.fine[c] && !grid.fine[q]) continue;
           const float nd = std::max(0.0f, glm::dot(grid.normal[c], grid.normal[q]));
           const float n2 = nd * nd, n4 = n2 * n2;
           const float plane = glm::dot(grid.normal[c], grid.position[q] - grid.position[c]) / sigma;
@@ -843,7 +851,7 @@ void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseM
       const uint32_t own = grid.coarse_of[t];
       if (own == kNoTexel) continue;
       glm::vec3 v;
-      if (k == 1 && grid.alive[own]) {
+      if ((k == 1 || grid.fine[own]) && grid.alive[own]) {
         v = map[own];
       } else {
         const float cx = (float(x) + 0.5f) * inv_k - 0.5f, cy = (float(y) + 0.5f) * inv_k - 0.5f;

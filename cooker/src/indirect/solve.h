@@ -170,7 +170,8 @@ std::vector<float> near_field(const GatherOperator& op);
 // Edge-avoiding a-trous filter over `levels` passes (steps 1, 2, 4, ... blocks), weights from the
 // coarse texels' charts, normals, planes and near field (`near`, near_field(); null: not used;
 // per texel, passes after the first also by kOpenNearField) only, never from values: linear, so
-// it commutes with the decomposition. 0 levels: no filtering.
+// it commutes with the decomposition. 0 levels: no filtering. A coarse texel split from a block
+// at a contact (CoarseGrid::fine) is filtered with other such texels only.
 void denoise(const CoarseGrid& grid, int levels, CoarseMap& map,
              const std::vector<float>* near = nullptr, float near_sigma = kNearFieldSigma);
 

@@ -63,6 +63,10 @@ struct BakeOptions {
   int gather_rays = 0;     // rays per coarse texel; 0 = preset
   int indirect_scale = 0;  // 1, 2, 4 or 8; 0 = preset
   int denoise = -1;        // a-trous passes, 0..3; < 0 = preset
+  // A 2x2 block that touches other geometry (a crate's foot) gathers per texel, half the rays a
+  // texel, denoised among such texels (docs/accuracy.md, section (m)): preview's contact detail,
+  // for about 1.3x its CPU time on the small inn. Off: every block as the preset has it.
+  bool contact_texels = false;
   // The effect plan (DESIGN.md, "Only what the scene calls for"). false forces everything on, to
   // measure what the plan saves: bounce light for every light group, every object's change to it
   // solved, every light-object pair traced and kept (no reach or cone culling, no peak
@@ -106,6 +110,7 @@ struct GatherPreset {
   int rays = 0;
   int level = 1;
   int denoise = 0;
+  bool contact_texels = false;  // BakeOptions::contact_texels
 };
 GatherPreset gather_preset(const BakeOptions& options);
 
