@@ -32,9 +32,9 @@ constexpr int kMinLevelRays = 16;
 // block_touches(): how far its probes reach (blocks), how many leave each texel, and the share
 // of them that must be blocked. Chosen on the test room at preview (docs/accuracy.md, section
 // (m)): 0.5 and 1 block, or a share of 0.2, split fewer blocks and left more of the blur.
-static const float kContactReach = getenv("LP_CR") ? float(atof(getenv("LP_CR"))) : 2.0f;
+constexpr float kContactReach = 2.0f;
 constexpr int kContactProbes = 8;
-static const float kContactFraction = getenv("LP_CF") ? float(atof(getenv("LP_CF"))) : 0.1f;
+constexpr float kContactFraction = 0.1f;
 // Only 2x2 blocks split (preview's; production gathers per texel): a 4x4 block split is 16
 // gathers for one, which would undo what draft's and the coarser indirect maps' blocks save.
 constexpr int kContactLevel = 2;
@@ -434,8 +434,7 @@ CoarseGrid build_coarse_grid(const TexelSet& texels, int level, const Tracer* tr
 }
 
 int fine_ray_count(int rays) {
-  return std::min(rays, std::max(kMinLevelRays, rays / (getenv("LP_FR") ? atoi(getenv("LP_FR"))
-                                                                        : kFineRayDivisor)));
+  return std::min(rays, std::max(kMinLevelRays, rays / kFineRayDivisor));
 }
 
 GatherOperator build_gather(const Scene& scene, const Layout& layout, const TexelSet& texels,
@@ -498,10 +497,8 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   auto ray_offsets = [&](uint32_t c) {
     return rotation_of(sample_hash(options.seed, c, 0x6761746865ull, 0));
   };
-  // A texel split from a block at a contact traces the first rays_of(c) of its rays; the rest
-  // stay unused (kNoTexel, out of its weights).
-  const int fine_rays = fine_ray_count(n_rays);
-  auto rays_of = [&](uint32_t c) { return g.fine[c] ? fine_rays : n_rays; };
+  // A texel split from a block at a contact traces the first op.traced_rays(c) of its rays; the
+  // rest stay unused (kNoTexel as assigned above, out of its weights).
   const bool objects = !scene.objects.empty();
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
@@ -518,38 +515,31 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(c);
       const auto [o1, o2] = ray_offsets(c);
       uint32_t crossings_here = 0;
-      const int traced = rays_of(c);
+      const int traced = op.traced_rays(c);
       // One texel's rays leave a few nearby points: coherent, so they are traced as packets,
       // first through static geometry, then each up to its static hit through the objects alone
       // (a scene of their own, small). Tracing on through the whole scene after each object hit
       // cost a semi-dynamic cook's gather a third more than a static one's, and lost the static
       // surface an object rests on (the floor under a crate, hit where the crate's bottom is).
-      for (int k = 0; k < n_rays; ++k) {
-        rays[size_t(k)] = gather_ray(c, k, o1, o2);
-        if (k >= traced) rays[size_t(k)].tmax = rays[size_t(k)].tmin;  // skipped, not counted
-      }
-      tracer.intersect_many(rays.data(), n_rays, first.data(), false);
+      for (int k = 0; k < traced; ++k) rays[size_t(k)] = gather_ray(c, k, o1, o2);
+      tracer.intersect_many(rays.data(), traced, first.data(), false);
       if (objects) {
-        for (int k = 0; k < n_rays; ++k) {
+        for (int k = 0; k < traced; ++k) {
           to_static[size_t(k)] = rays[size_t(k)];
           if (first[size_t(k)].hit) to_static[size_t(k)].tmax = first[size_t(k)].t;
         }
-        tracer.intersect_objects_many(to_static.data(), n_rays, object.data());
+        tracer.intersect_objects_many(to_static.data(), traced, object.data());
       }
       // The texels under the hits are far apart in memory: fetched for all rays at once, their
       // cache misses overlap instead of stalling ray after ray.
       if (!locator) {
-        for (int k = 0; k < n_rays; ++k) {
+        for (int k = 0; k < traced; ++k) {
           under[size_t(k)] =
               first[size_t(k)].hit ? texel_under(layout, texels, first[size_t(k)]) : kNoTexel;
           if (under[size_t(k)] != kNoTexel) __builtin_prefetch(&surfaces[under[size_t(k)]]);
         }
       }
-      for (int k = 0; k < n_rays; ++k) {
-        if (k >= traced) {
-          op.hit[size_t(c) * size_t(n_rays) + size_t(k)] = kNoTexel;
-          continue;
-        }
+      for (int k = 0; k < traced; ++k) {
         const glm::vec3 origin = rays[size_t(k)].origin, dir = rays[size_t(k)].dir;
         Crossing rec{uint32_t(k), uint32_t(ch.size()), 0};
         const Hit& s = first[size_t(k)];
@@ -604,8 +594,8 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
     std::vector<uint8_t> member_buried;
     for (size_t c = size_t(item) * 256; c < std::min(nc, size_t(item + 1) * 256); ++c) {
       const uint32_t m0 = g.member_offset[c], mc = g.member_count(uint32_t(c));
-      buried_members(op.hit.data() + c * size_t(n_rays), rays_of(uint32_t(c)), mc, back, total,
-                     member_buried);
+      buried_members(op.hit.data() + c * size_t(n_rays), op.traced_rays(uint32_t(c)), mc, back,
+                     total, member_buried);
       for (uint32_t m = 0; m < mc; ++m)
         if (member_buried[m]) buried[g.members[m0 + m]] = 1;
     }
@@ -679,7 +669,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
       const auto [o1, o2] = ray_offsets(c);
       uint32_t used[GatherOperator::kLevels] = {0, 0, 0};
       uint32_t* hits = op.hit.data() + size_t(c) * size_t(n_rays);
-      const int traced = rays_of(c);
+      const int traced = op.traced_rays(c);
       for (int k = 0; k < n_rays; ++k) {
         const bool drop = k >= traced || buried[g.members[m0 + uint32_t(k) % mc]] != 0;
         const uint32_t f = hits[k];

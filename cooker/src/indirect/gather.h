@@ -145,9 +145,15 @@ struct GatherOptions {
   bool split_contacts = false;
 };
 
+// The rays a coarse texel split at a contact (CoarseGrid::fine) traces of the `rays` of every
+// other: half (at least 16), so that a split 2x2 block costs two blocks' rays.
+int fine_ray_count(int rays);
+
 struct GatherOperator {
   CoarseGrid grid;
   int rays = 0;
+  // The rays coarse texel c traced: a prefix of its `rays` slots, the rest kNoTexel.
+  int traced_rays(uint32_t c) const { return grid.fine[c] ? fine_ray_count(rays) : rays; }
   // Static hit of every ray (objects absent) as a coarse texel, kNoTexel for a miss or the back
   // of a surface: rays * grid.size() entries, coarse texel c's rays at [c * rays, (c+1) * rays).
   std::vector<uint32_t> hit;
@@ -181,10 +187,6 @@ struct GatherOperator {
   std::vector<std::vector<uint32_t>> sources;      // tile -> source tiles (sorted, unique)
   uint64_t rays_traced = 0;
 };
-
-// The rays a coarse texel split at a contact (CoarseGrid::fine) traces of the `rays` of every
-// other: half (at least 16), so that a split 2x2 block costs two blocks' rays.
-int fine_ray_count(int rays);
 
 // Traces every coarse texel's gather rays. `layout` maps hits to light-map texels.
 GatherOperator build_gather(const Scene& scene, const Layout& layout, const TexelSet& texels,

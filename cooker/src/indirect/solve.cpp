@@ -161,8 +161,6 @@ void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
   using V4 = float __attribute__((vector_size(16)));
   constexpr size_t kStride = stride_of(K), kVectors = kStride / 4;
   const int n = op.level_rays[level];
-  // A texel split at a contact traced a prefix of its rays; the rest are kNoTexel.
-  const int n_fine = std::min(n, fine_ray_count(op.rays));
   const std::vector<float>& weight = op.weight[level];
   const int items = int((receivers.size() + kChunk - 1) / kChunk);
   auto at = [&](uint32_t c, size_t j) {
@@ -182,7 +180,7 @@ void gather_k(const GatherOperator& op, const float* src, const GatherJob* jobs,
       const uint32_t c = receivers[i];
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       V4 acc[kVectors] = {};  // registers: the sum of every source at once
-      const int rays = op.grid.fine[c] ? n_fine : n;
+      const int rays = std::min(n, op.traced_rays(c));  // the rest are kNoTexel
       for (int k = 0; k < rays; ++k) {
         if (hits[k] == kNoTexel) continue;
         const float* v = src + size_t(hits[k]) * kStride;
@@ -443,7 +441,7 @@ GatherReach gather_reach(const GatherOperator& op, int threads) {
     for (uint32_t c = uint32_t(item * per_item); c < end; ++c) {
       const uint32_t* hits = op.hit.data() + size_t(c) * size_t(op.rays);
       uint32_t rec = op.crossing_offset[c];
-      const int rays = op.grid.fine[c] ? fine_ray_count(op.rays) : op.rays;
+      const int rays = op.traced_rays(c);
       for (int k = 0; k < rays; ++k) {
         const uint32_t cls = class_of(k);
         auto add = [&](uint32_t coarse) {
