@@ -39,8 +39,8 @@ struct TexelFootprint {
 // static surface stands between the texel's sample point and the cell's centre or one of its
 // corners (along the surface, just above it: a wall standing on the floor, a table against the
 // wall), so that no point of an open cell lies inside a wall; semi-dynamic objects do not close
-// cells, so every state samples the same points. A texel with no open cell keeps them all (its
-// sample point is in the open: texel_builder.cpp pushes it out).
+// cells, so every state samples the same points. A texel with no open cell is its sample point
+// alone (a0 = a1 = b0 = b1 = 0; the point is in the open: texel_builder.cpp pushes it out).
 std::vector<TexelFootprint> texel_footprints(const TexelSet& texels, const Tracer* tracer = nullptr,
                                              int threads = 1);
 

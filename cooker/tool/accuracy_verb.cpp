@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -68,6 +69,7 @@ constexpr double kMatterFraction = 0.01;
 
 struct AccuracyOptions {
   std::string scene_path, csv_path, plot_path, runtime_csv_path;
+  std::string maps_dir;  // --maps: each row's recomposed map and the reference, as PFM
   bool gles = false;
   int lightmap_size = 0;
   int reference_scale = 0;        // 0 = kReferenceFactor (kQuickReferenceFactor with --quick)
@@ -559,6 +561,18 @@ double cpu_rebuild_ms(const std::vector<uint8_t>& pack, int reps) {
   return ms[ms.size() / 2];
 }
 
+// --maps: DIR/NAME.pfm, NAME a row's setting ("preset=preview" -> "preset_preview") or
+// "reference"; characters other than letters, digits, '.', '-' and '_' become '_'.
+std::string map_path(const std::string& dir, const std::string& name) {
+  std::string file;
+  for (char c : name) {
+    const bool keep =
+        std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_';
+    file += keep ? c : '_';
+  }
+  return (std::filesystem::path(dir) / (file + ".pfm")).string();
+}
+
 std::string runtime_csv_text(const std::vector<RuntimeRow>& rows,
                              const std::vector<std::string>& notes) {
   std::string s;
@@ -581,6 +595,7 @@ int verb_accuracy(Args& args) {
   args.option("--csv", &o.csv_path);
   args.option("--plot", &o.plot_path);
   args.option("--runtime-csv", &o.runtime_csv_path);
+  args.option("--maps", &o.maps_dir);
   o.gles = args.flag("--gles");
   o.quick = args.flag("--quick");
   o.no_cache = args.flag("--no-cache");
@@ -624,6 +639,13 @@ int verb_accuracy(Args& args) {
   probe_output_folder(o.csv_path);
   probe_output_folder(o.plot_path);
   if (!o.runtime_csv_path.empty()) probe_output_folder(o.runtime_csv_path);
+  if (!o.maps_dir.empty()) {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(o.maps_dir, ec)) {
+      throw ArgsError("--maps " + o.maps_dir + ": not a folder (create it first)");
+    }
+    probe_output_folder(map_path(o.maps_dir, "reference"));
+  }
 
   const auto t_all = std::chrono::steady_clock::now();
   Progress progress(o.quiet);
@@ -698,6 +720,9 @@ int verb_accuracy(Args& args) {
       hasher.value(l.semi_dynamic);
     }
     if (o.path_traced) {
+      // The definition of a texel's light (its patch, texel_footprint.h; paths that start inside
+      // solid geometry dropped): a change to it is a new reference.
+      hasher.text("reference 2: inside paths dropped, a patch with no open cell its point");
       hasher.value(pt_options.samples);
       hasher.value(pt_options.target_noise);
       hasher.value(pt_options.seed);
@@ -762,7 +787,11 @@ int verb_accuracy(Args& args) {
       reference = std::move(rb.map);
       reference_error = std::move(rb.std_error);
       finalize_map(reference_error, scene, ref_layout.layout, ref_layout.texels);
-      ref_info = {{"samples", rb.samples}, {"rays", rb.rays}, {"seconds", rb.seconds}};
+      ref_info = {{"samples", rb.samples},
+                  {"rays", rb.rays},
+                  {"seconds", rb.seconds},
+                  {"inside_path_fraction", rb.inside_path_fraction},
+                  {"inside_texels", rb.inside_texels}};
     } else {
       reference = bake_state(scene, ref_layout.layout, ref_layout.texels, *tracer, StateSpec{},
                              ref_options, progress, scratch);
@@ -780,6 +809,10 @@ int verb_accuracy(Args& args) {
   }
   for (float v : reference.data) {
     if (!std::isfinite(v)) throw CookError("accuracy: the reference map has a non-finite texel");
+  }
+  if (!o.maps_dir.empty()) {
+    write_pfm(map_path(o.maps_dir, "reference"), reference);
+    if (o.path_traced) write_pfm(map_path(o.maps_dir, "reference.stderr"), reference_error);
   }
   const ReferenceStats stats = reference_stats(reference, ref_layout.texels, scene);
   if (stats.valid.empty()) throw CookError("accuracy: the scene has no light-map texels");
@@ -882,6 +915,11 @@ int verb_accuracy(Args& args) {
       if (!std::isfinite(v)) throw CookError("accuracy: " + setting.name + ": non-finite texel");
     }
     row.m = compare(map, reference, stats, o.path_traced ? &reference_error : nullptr);
+    if (!o.maps_dir.empty()) {
+      FloatImage image(ref_layout.layout.width, ref_layout.layout.height, 3);
+      image.data = map;
+      write_pfm(map_path(o.maps_dir, setting.name), image);
+    }
     rows.push_back(row);
     if (reuse == &fresh && setting.lightmap_size == 0) baked.push_back(std::move(fresh));
     progress.advance();
@@ -972,7 +1010,12 @@ int verb_accuracy(Args& args) {
                 ref_info.value("rays", nlohmann::json(0)).dump() + " rays in " +
                 number(ref_info.value("seconds", 0.0), "%.1f") + " s, seed " +
                 std::to_string(pt_options.seed) + "), " + std::to_string(reference.width) + "x" +
-                std::to_string(reference.height) + (cached ? ", from the cache" : "")
+                std::to_string(reference.height) + (cached ? ", from the cache" : "") +
+                "; paths whose first ray met the back of a static surface started inside solid "
+                "geometry and are not samples (a texel is the mean of its others): " +
+                number(100.0 * ref_info.value("inside_path_fraction", 0.0), "%.3f") +
+                " % of the paths; " + ref_info.value("inside_texels", nlohmann::json(0)).dump() +
+                " valid texels had none (never seen: 0)"
           : "reference: bake_state of the authored state, production x" + std::to_string(factor) +
                 " (" + std::to_string(ref_options.gather_rays) + " gather rays, " +
                 std::to_string(ref_options.area_samples) + " area samples, seed " +

@@ -242,6 +242,10 @@ constexpr const char* kAccuracyHelp =
     "                         of the same bake's unquantized maps; error, atlas and target bytes\n"
     "  --gles                 with --runtime-csv: also the GLES runtime's RGBA16F target (EGL\n"
     "                         surfaceless; its time is `lightpatch bench`'s)\n"
+    "  --maps DIR             also each row's recomposed map (DIR/preset_preview.pfm, ...) and\n"
+    "                         the reference (DIR/reference.pfm, .stderr.pfm beside it), in the\n"
+    "                         reference's layout, rows from the top as max_error_x/_y count\n"
+    "                         them: to see where a row's error lies (existing files replaced)\n"
     "  --no-cache             bake the reference again (the cache file is rewritten)\n"
     "  --seed N               random seed of the sweep's bakes (the reference uses N + 7919)\n"
     "  --threads N            worker threads (default: all cores)\n"
@@ -294,7 +298,9 @@ const Verb kVerbs[] = {
     {"accuracy", lightpatch::tool::verb_accuracy,
      "accuracy SCENE --csv OUT.csv --plot OUT.png [--runtime-csv OUT.csv [--gles]] "
      "[--lightmap-size N] [--quick] [--reference-integrator reference|cook] "
-     "[--reference-samples N] [--reference-noise P] [--reference-scale K] [--no-cache] [--seed N] "
+     "[--reference-samples N] [--reference-noise P] [--reference-scale K] [--maps DIR] "
+     "[--no-cache] "
+     "[--seed N] "
      "[--threads N] "
      "[--quiet]",
      kAccuracyHelp},

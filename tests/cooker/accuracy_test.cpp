@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <map>
 #include <sstream>
 #include <string>
@@ -202,8 +204,12 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
   }
   EXPECT_EQ(encodings, (std::vector<std::string>{"auto", "linear", "square"}));
 
-  // Second run: the cached reference is used, not baked again.
-  const ToolRun second = run_tool(args);
+  // Second run: the cached reference is used, not baked again; --maps writes each row's
+  // recomposed map and the reference.
+  std::filesystem::create_directory(dir.file("maps"));
+  std::vector<std::string> with_maps = args;
+  with_maps.insert(with_maps.end(), {"--maps", dir.file("maps")});
+  const ToolRun second = run_tool(with_maps);
   ASSERT_EQ(second.code, 0) << describe(args, second);
   EXPECT_NE(second.err.find("reference: using the cache"), std::string::npos) << second.err;
   EXPECT_EQ(second.err.find("reference: baking"), std::string::npos) << second.err;
@@ -214,6 +220,36 @@ TEST(Accuracy, QuickSweepWritesCsvAndPlotAndReusesTheCachedReference) {
   for (const std::string& n : again.notes) noted = noted || n.find("from the cache") != n.npos;
   EXPECT_TRUE(noted);
   EXPECT_EQ(again.rows.size(), 4u);
+  const std::vector<std::string> maps = {
+      "preset_draft", "preset_production", "encoding_linear__draft_", "encoding_square__draft_",
+      "reference",    "reference.stderr"};
+  std::vector<std::string> want;
+  for (const std::string& m : maps) want.push_back(m + ".pfm");
+  std::sort(want.begin(), want.end());
+  std::vector<std::string> written;
+  for (const auto& e : std::filesystem::directory_iterator(dir.file("maps")))
+    written.push_back(e.path().filename().string());
+  std::sort(written.begin(), written.end());
+  EXPECT_EQ(written, want);
+  // Each a 32x32 RGB PFM; draft's map is not the reference's, but near it.
+  auto sum_of = [&](const std::string& name) {
+    const std::vector<std::uint8_t> b = read_bytes(dir.file("maps/" + name + ".pfm"));
+    const std::string head = "PF\n32 32\n-1.0\n";
+    EXPECT_EQ(b.size(), head.size() + 32 * 32 * 3 * 4) << name;
+    EXPECT_EQ(std::string(b.begin(), b.begin() + long(std::min(b.size(), head.size()))), head)
+        << name;
+    double sum = 0.0;
+    for (size_t i = head.size(); i + 4 <= b.size(); i += 4) {
+      float v = 0.0f;
+      std::memcpy(&v, &b[i], 4);
+      sum += v;
+    }
+    return sum;
+  };
+  const double reference = sum_of("reference"), draft_sum = sum_of("preset_draft");
+  EXPECT_GT(reference, 0.0);
+  EXPECT_NE(draft_sum, reference);
+  EXPECT_NEAR(draft_sum / reference, 1.0, 0.5);
 }
 
 TEST(Accuracy, HelpListsTheOptions) {
@@ -222,7 +258,7 @@ TEST(Accuracy, HelpListsTheOptions) {
   for (const char* option :
        {"--csv", "--plot", "--runtime-csv", "--gles", "--lightmap-size", "--quick",
         "--reference-integrator", "--reference-samples", "--reference-noise", "--reference-scale",
-        "--no-cache", "--seed", "--threads", "--quiet"}) {
+        "--maps", "--no-cache", "--seed", "--threads", "--quiet"}) {
     EXPECT_NE(r.out.find(option), std::string::npos) << option << " not in: " << r.out;
   }
 }
@@ -256,6 +292,8 @@ TEST(Accuracy, BadOptionsFailWithAMessageAndWriteNothing) {
       {{"accuracy", dir.file("broken.glb"), "--csv", csv, "--plot", png, "--quick"}, "broken.glb"},
       {{"accuracy", scene, "--csv", dir.file("no/such/folder/a.csv"), "--plot", png, "--quick"},
        "cannot write"},
+      {{"accuracy", scene, "--csv", csv, "--plot", png, "--quick", "--maps", dir.file("none")},
+       "not a folder"},
   };
   for (const auto& [args, word] : cases) {
     const std::vector<std::string> before = dir.entries();

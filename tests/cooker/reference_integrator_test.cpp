@@ -2,7 +2,8 @@
 // over an open floor (no bounce, so no noise), a sphere light facing and straddling a receiver's
 // horizon, an emissive square's form factor; its standard error against the spread of
 // independent seeds; the same bits on any thread count; the state honoured as bake_state honours
-// it. The furnace is in quality/reference_quality_test.cpp (seconds).
+// it; paths that start inside solid geometry dropped. The furnace is in
+// quality/reference_quality_test.cpp (seconds).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -325,6 +326,57 @@ TEST(ReferenceIntegrator, HonoursTheSceneState) {
   fixed_change.lights["fixed"].has_on = true;
   fixed_change.lights["fixed"].on = false;
   EXPECT_THROW(trace(scene, texels, 2, 1, 0, fixed_change), CookError);
+}
+
+// A texel's light is that of the visible part of its patch: a path whose first ray meets the back
+// of a static surface started inside solid geometry and is not a sample. A 9 x 7 mm post through
+// a floor, a sun straight above, no bounce (albedo 0: every kept path brings exactly the sun),
+// texels 10 cm apart: the post stands in one cell of the middle texel's patch, clear of the lines
+// of sight that close cells (texel_footprint.h), so that cell stays open and 0.6 % of the patch's
+// points are inside the post. Counted as black they took 0.6 % of its light, with a standard error;
+// now it has the sun's 2 lux exactly, and the post's share of the paths is reported. As a
+// semi-dynamic object the same post keeps its paths (an object present is darkness, not a solid
+// the texel lies in) until it is hidden.
+TEST(ReferenceIntegrator, PathsThatStartInsideSolidGeometryAreNotSamples) {
+  const glm::vec3 lo(0.040f, -0.5f, 0.003f), hi(0.049f, 0.5f, 0.010f);
+  const TexelSet texels =
+      grid_texels(3, 3, {-0.15f, 0.0f, -0.15f}, {0.3f, 0.0f, 0.0f}, {0, 0, 0.3f}, {0, 1, 0});
+  for (const bool object : {false, true}) {
+    Scene scene = floor_scene();
+    if (object) {
+      test::add_object_box(scene, lo, hi, "post");
+    } else {
+      test::add_box(scene, lo, hi, "post");
+    }
+    scene.lights = {test::directional_light("sun", {0.0f, -1.0f, 0.0f}, 2.0f)};
+    test::finish(scene);
+    scene.materials[0].albedo = glm::vec3(0.0f);
+    auto tracer = make_embree_tracer(scene);
+    Progress progress(true);
+    Report report;
+    ReferenceOptions o;
+    o.samples = 4096;
+    const ReferenceBake r = bake_reference(scene, texels, *tracer, {}, o, progress, report);
+    const float middle = r.map.at(1, 1, 0);
+    std::printf("reference, a texel with a post in its patch (%s): %.5f, paths inside %.5f\n",
+                object ? "object" : "static", middle, r.inside_path_fraction);
+    EXPECT_EQ(r.inside_texels, 0u);
+    if (!object) {
+      EXPECT_NEAR(middle, 2.0f, 1e-5f);
+      EXPECT_EQ(r.std_error.at(1, 1, 0), 0.0f);
+      // 0.63 % of the middle texel's paths, a ninth of that of all.
+      EXPECT_NEAR(r.inside_path_fraction * 9.0, 0.0063, 0.0015);
+      continue;
+    }
+    EXPECT_LT(middle, 1.997f);
+    EXPECT_GT(middle, 1.98f);
+    EXPECT_GT(r.std_error.at(1, 1, 0), 0.0f);
+    EXPECT_EQ(r.inside_path_fraction, 0.0);
+    StateSpec hidden;
+    hidden.objects["post"] = false;
+    const ReferenceBake h = bake_reference(scene, texels, *tracer, hidden, o, progress, report);
+    EXPECT_NEAR(h.map.at(1, 1, 0), 2.0f, 1e-5f);
+  }
 }
 
 }  // namespace

@@ -57,5 +57,31 @@ TEST(TexelFootprint, ObjectsCloseNoCell) {
   EXPECT_EQ(fp[f.texels.index(7, 5)].open, 0xFFFF);
 }
 
+// A texel whose every cell runs into geometry (here a floor texel in a 2 cm slot between two
+// walls; in the small inn, corner texels of small props' charts) is its sample point alone: with
+// all its cells kept, most of its points lay inside the walls, where the cook's gather rays met
+// only back faces and the path tracer's paths were black.
+TEST(TexelFootprint, ATexelWithNoOpenCellIsItsSamplePoint) {
+  const FloorBesideAWall f(false);
+  Scene scene = f.scene;
+  test::add_box(scene, {0.34f, 0, -1}, {0.44f, 1, 1}, "other wall");
+  test::add_box(scene, {0.46f, 0, -1}, {0.56f, 1, 1}, "slot wall");
+  test::finish(scene);
+  auto tracer = make_embree_tracer(scene);
+  const std::vector<TexelFootprint> fp = texel_footprints(f.texels, tracer.get(), 2);
+  const size_t slot = f.texels.index(7, 5), open = f.texels.index(3, 5);
+  EXPECT_EQ(fp[slot].a0, 0.0f);
+  EXPECT_EQ(fp[slot].a1, 0.0f);
+  EXPECT_EQ(fp[slot].b0, 0.0f);
+  EXPECT_EQ(fp[slot].b1, 0.0f);
+  for (int k = 0; k < 256; ++k) {
+    const glm::vec3 p = footprint_point(fp[slot], f.texels.position[slot], k, 42);
+    EXPECT_NEAR(p.x, 0.45f, 1e-5f) << "point " << k;
+  }
+  EXPECT_EQ(fp[open].open, 0xFFFF);
+  EXPECT_EQ(fp[open].a0, -0.5f);
+  EXPECT_EQ(fp[open].a1, 0.5f);
+}
+
 }  // namespace
 }  // namespace lightpatch::cooker

@@ -8,7 +8,9 @@
 // Every path's random numbers are hashed from (seed, texel, sample, bounce), so the result is the
 // same on any thread count. Samples run in passes of 16, progressively: progress reports the
 // convergence after each power of two, where an optional noise target can stop it. The
-// per-texel spread of the samples gives a standard-error map beside the irradiance map.
+// per-texel spread of the samples gives a standard-error map beside the irradiance map. A texel's
+// irradiance is the mean over the visible part of its patch: a path whose first ray meets the back
+// of a static surface started inside solid geometry and is dropped (ReferenceBake).
 #pragma once
 
 #include <cstdint>
@@ -62,6 +64,11 @@ struct ReferenceBake {
   // sqrt(sum std_error^2 / sum map^2) over valid texels and channels: the relative RMSE that the
   // reference's own noise alone gives (the accuracy sweep's rel_rmse floor).
   double rel_rmse_noise = 0.0;
+  // Paths whose first ray met the back of a static surface started inside solid geometry and are
+  // not samples (the texel's value is the mean of its others): their share of all paths, and the
+  // texels with none left (never seen: under a wall, inside a table top), which stay 0.
+  double inside_path_fraction = 0.0;
+  uint64_t inside_texels = 0;
 };
 
 // Bakes one scene state (lights on/off/colour/intensity and objects visible or not, resolved by
