@@ -105,6 +105,10 @@ struct Metrics {
   // of smaller error).
   double rel_rmse_excess = 0.0;
   bool within_noise = false;
+  // The sign of the error, which a relative RMSE hides: the row's light over the reference's,
+  // summed over valid texels and channels, less 1; and the median over the texels that matter of
+  // the ratio of their channel sums (1 when the typical texel is right).
+  double bias = 0.0, median_ratio = 1.0;
 };
 
 struct Row {
@@ -210,11 +214,16 @@ constexpr double kNoiseSigmas = 3.0;
 Metrics compare(const std::vector<float>& map, const FloatImage& ref, const ReferenceStats& s,
                 const FloatImage* se = nullptr) {
   Metrics m;
-  double sq = 0.0;
+  double sq = 0.0, sum_x = 0.0, sum_r = 0.0;
+  std::vector<double> ratios;
   for (size_t k = 0; k < s.valid.size(); ++k) {
     const size_t i = s.valid[k];
     const float* r = &ref.data[i * 3];
     const float* x = &map[i * 3];
+    const double tx = double(x[0]) + x[1] + x[2], tr = double(r[0]) + r[1] + r[2];
+    sum_x += tx;
+    sum_r += tr;
+    if (s.matters[k] && tr > 0.0) ratios.push_back(tx / tr);
     double worst = 0.0, beyond = 0.0;
     for (int c = 0; c < 3; ++c) {
       const double d = double(x[c]) - double(r[c]);
@@ -234,6 +243,12 @@ Metrics compare(const std::vector<float>& map, const FloatImage& ref, const Refe
     }
   }
   m.rel_rmse = s.sum_sq > 0.0 ? std::sqrt(sq / s.sum_sq) : 0.0;
+  m.bias = sum_r > 0.0 ? sum_x / sum_r - 1.0 : 0.0;
+  if (!ratios.empty()) {
+    const size_t mid = ratios.size() / 2;
+    std::nth_element(ratios.begin(), ratios.begin() + long(mid), ratios.end());
+    m.median_ratio = ratios[mid];
+  }
   const double n = 3.0 * double(std::max<size_t>(1, s.valid.size()));
   const double mse = sq / n;
   m.psnr_db = mse > 0.0 ? 10.0 * std::log10(s.peak * s.peak / mse) : HUGE_VAL;
@@ -449,7 +464,7 @@ std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string
   for (const std::string& n : notes) s += "# " + n + "\n";
   s += "setting,knob,quality,gather_rays,indirect_scale,denoise,area_samples,lightmap_size,"
        "encoding,cook_s,rays,pack_bytes,rel_rmse,max_rel_error,psnr_db,pareto,rel_rmse_excess,"
-       "within_noise,max_rel_error_beyond_noise,max_error_x,max_error_y\n";
+       "within_noise,max_rel_error_beyond_noise,max_error_x,max_error_y,bias,median_ratio\n";
   for (const Row& r : rows) {
     const BakeOptions& b = r.setting.bake;
     const GatherPreset gp = gather_preset(b);
@@ -466,7 +481,8 @@ std::string csv_text(const std::vector<Row>& rows, const std::vector<std::string
          number(r.m.max_rel_error) + "," + number(r.m.psnr_db, "%.3f") + "," +
          (r.pareto ? "1" : "0") + "," + number(r.m.rel_rmse_excess) + "," +
          (r.m.within_noise ? "1" : "0") + "," + number(r.m.max_rel_error_beyond_noise) + "," +
-         std::to_string(r.m.max_x) + "," + std::to_string(r.m.max_y) + "\n";
+         std::to_string(r.m.max_x) + "," + std::to_string(r.m.max_y) + "," + number(r.m.bias) +
+         "," + number(r.m.median_ratio) + "\n";
   }
   return s;
 }
@@ -1044,6 +1060,9 @@ int verb_accuracy(Args& args) {
       "reference there (not below 0): what the reference's noise cannot explain (= max_rel_error "
       "without a path-traced reference)",
       "psnr_db = 10 log10(peak^2 / MSE), peak = 99th percentile of the reference's max channel",
+      "bias = sum x / sum r - 1 over RGB of valid texels (the sign rel_rmse hides: < 0, the row is "
+      "darker); median_ratio = the median over texels that matter of (x_r+x_g+x_b) / "
+      "(r_r+r_g+r_b) (1: the typical texel is right)",
       "knob rows vary one knob from the preview preset; rows that differ only in encoding reuse "
       "the bake (cook_s = its bake time + their own pack time)",
       "texel density rows: a coarser page, resampled to the reference's texels by nearest valid "
@@ -1080,13 +1099,13 @@ int verb_accuracy(Args& args) {
   }
 
   if (!o.quiet) {
-    std::printf("%-34s %9s %12s %10s %9s %9s %8s %s\n", "setting", "cook_s", "rays", "pack_bytes",
-                "rel_rmse", "max_rel", "psnr_db", "pareto");
+    std::printf("%-34s %9s %12s %10s %9s %9s %8s %8s %s\n", "setting", "cook_s", "rays",
+                "pack_bytes", "rel_rmse", "max_rel", "bias", "psnr_db", "pareto");
     for (const Row& r : rows) {
-      std::printf("%-34s %9.3f %12llu %10llu %8.3f%% %8.2f%% %8.2f %s%s\n", r.setting.name.c_str(),
-                  r.cook_s, static_cast<unsigned long long>(r.rays),
+      std::printf("%-34s %9.3f %12llu %10llu %8.3f%% %8.2f%% %+7.2f%% %8.2f %s%s\n",
+                  r.setting.name.c_str(), r.cook_s, static_cast<unsigned long long>(r.rays),
                   static_cast<unsigned long long>(r.pack_bytes), 100.0 * r.m.rel_rmse,
-                  100.0 * r.m.max_rel_error, r.m.psnr_db, r.pareto ? "*" : "",
+                  100.0 * r.m.max_rel_error, 100.0 * r.m.bias, r.m.psnr_db, r.pareto ? "*" : "",
                   r.m.within_noise ? " (within the reference's noise)" : "");
     }
     if (!runtime_rows.empty()) {
