@@ -270,7 +270,9 @@ int verb_bake_state(Args& args) {
     progress.message("reference: " + std::to_string(rb.samples) + " samples, " +
                      std::to_string(rb.rays) + " rays, mean relative standard error " +
                      std::to_string(100.0 * rb.mean_rel_std_error) + " %, noise rel. RMSE " +
-                     std::to_string(100.0 * rb.rel_rmse_noise) + " %");
+                     std::to_string(100.0 * rb.rel_rmse_noise) + " %, paths from inside solids " +
+                     std::to_string(100.0 * rb.inside_path_fraction) + " % (dropped; " +
+                     std::to_string(rb.inside_texels) + " texels had only such, left 0)");
     map = std::move(rb.map);
     std_error = std::move(rb.std_error);
   } else {
