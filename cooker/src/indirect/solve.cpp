@@ -696,8 +696,8 @@ std::vector<float> near_field(const GatherOperator& op) {
       if (h >= grid.size()) continue;  // a miss or the back of a surface: far
       sum += std::exp(-glm::length(grid.position[h] - grid.position[c]) / reach);
     }
-    // A split texel traced fewer rays (gather.h fine_ray_count): the mean over those.
-    out[c] = grid.fine[c] ? sum * op.weight[0][c] : sum / float(op.rays);
+    // The mean over the rays it traced (a split texel traces fewer, gather.h fine_ray_count).
+    out[c] = sum / float(op.traced_rays(uint32_t(c)));
   }
   return out;
 }
