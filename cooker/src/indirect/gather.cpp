@@ -500,6 +500,13 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   // A texel split from a block at a contact traces the first op.traced_rays(c) of its rays; the
   // rest stay unused (kNoTexel as assigned above, out of its weights).
   const bool objects = !scene.objects.empty();
+  // The widest texel spacing of the page: a hit farther than kNearHitSpacings of it is near no
+  // texel, decided without loading the hit texel's footprint (a cache miss on nearly every ray:
+  // most rays cross the room).
+  float max_spacing = 0.0f;
+  if (options.footprints)
+    for (const TexelFootprint& f : *options.footprints)
+      max_spacing = std::max({max_spacing, glm::length(f.u), glm::length(f.v)});
   parallel_for(g.height, options.threads, [&](int by) {
     std::vector<Crossing>& cr = row_crossings[size_t(by)];
     std::vector<CrossingHit>& ch = row_hits[size_t(by)];
@@ -562,7 +569,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
         // A receiver on a mesh that stops no ray (a flame, a bulb) lends its light to no other
         // texel, and no player sees it lit by bounce light: its rays keep the cache.
         if (options.footprints && rec.count == 0 && static_hit != kNoTexel &&
-            static_hit != kBackFace) {
+            static_hit != kBackFace && static_t < kNearHitSpacings * max_spacing) {
           const TexelFootprint& f = (*options.footprints)[static_hit];
           const float spacing = std::max(glm::length(f.u), glm::length(f.v));
           const int32_t from =
