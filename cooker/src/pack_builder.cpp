@@ -1106,6 +1106,32 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     if (to_quantize[size_t(i)])
       quantized[size_t(i)] = quantize_patch(patches[size_t(i)], options.encoding);
   });
+  // A patch whose light spans more than its 8 bits hold (quantize.h) is cut where it stands, so
+  // that its group's patches stay together and in their order.
+  int range_cut = 0, range_pieces = 0;
+  {
+    std::vector<SourcePatch> kept;
+    std::vector<QuantizedPatch> kept_q;
+    kept.reserve(patches.size());
+    kept_q.reserve(patches.size());
+    for (size_t i = 0; i < patches.size(); ++i) {
+      const QuantizedPatch& q = quantized[i];
+      if (to_quantize[i] && patches[i].level == 0 &&
+          q.error[q.encoding].worst_over_allowance > 1.0) {
+        const bool light_map = patches[i].target == kTargetLightMap;
+        const size_t n =
+            split_for_range(std::move(patches[i]), light_map ? &layout.regions : nullptr,
+                            options.encoding, kept, kept_q);
+        range_cut += n > 1 ? 1 : 0;
+        range_pieces += n > 1 ? int(n) : 0;
+        continue;
+      }
+      kept.push_back(std::move(patches[i]));
+      kept_q.push_back(std::move(quantized[i]));
+    }
+    patches = std::move(kept);
+    quantized = std::move(kept_q);
+  }
 
   PackContents c;
   c.lightmap_width = uint32_t(layout.width);
@@ -1316,6 +1342,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   // Report: patches, the encoding decision with measured errors, atlas bytes vs a light map.
   EncodingError total[2], chosen;
   int chose[2] = {0, 0};
+  int beyond_allowance = 0;  // patches whose chosen encoding misses a texel's allowance
   std::map<std::string, int> by_kind;
   uint64_t negative = 0;
   const char* kind_names[kGroupKindMax + 1] = {"base", "contribution", "shadow", "pair_correction",
@@ -1325,6 +1352,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     total[1].add(quantized[i].error[1]);
     chosen.add(quantized[i].error[quantized[i].encoding]);
     chose[quantized[i].encoding]++;
+    beyond_allowance += quantized[i].error[quantized[i].encoding].worst_over_allowance > 1.0;
     by_kind[kind_names[patches[i].kind]]++;
     negative += patches[i].negative ? 1 : 0;
   }
@@ -1501,6 +1529,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   j["encoding"]["chosen"] = error_json(chosen);
   j["encoding"]["patches_linear"] = chose[0];
   j["encoding"]["patches_square"] = chose[1];
+  // Patches whose 8-bit codes miss a significant texel by more than its quantization_allowance
+  // (quantize.h: a step, or 1/128 of a bright texel) in both encodings: a range of light too wide
+  // for one patch's 8 bits.
+  j["encoding"]["patches_beyond_allowance"] = beyond_allowance;
+  // Level-0 patches cut into pieces for that (split_for_range), and the pieces they became.
+  j["encoding"]["patches_cut_for_range"] = range_cut;
+  j["encoding"]["pieces_cut_for_range"] = range_pieces;
   j["encoding"]["output_step"] = maps.output_step;
   j["atlases"] = atlases;
   j["atlas_bytes"] = atlas_bytes;

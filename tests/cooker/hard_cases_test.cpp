@@ -638,6 +638,68 @@ TEST(HardCases, FaintStaticLightSurvivesTheBrightLightsOff) {
   RecordProperty("worst_relative_rmse", std::to_string(expect_states_match(c, states)));
 }
 
+// A torch on a wall, its bracket's end 3 cm from the light, the bracket one node with the wall
+// (content tools export a room so): the bracket's end gets thousands of output steps, the wall
+// a metre away a few, and the two share a tile of the contribution map. Linear 8-bit codes of the
+// tile's peak stepped by more than the wall's light, which the pack rounded to 0 (the small inn:
+// its dining room's wall beside the torch 1.9 -> 0.13 against bake_state). The tile is cut where
+// its light spans more than its codes hold (quantize.h, split_for_range), so every wall texel of
+// a few steps keeps its light.
+TEST(HardCases, ATorchBracketBesideItsLightKeepsTheWallsLight) {
+  Cooked c;
+  Scene& s = c.scene;
+  add_floor(s);
+  const int wall = test::add_quad(s, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, "wall");
+  const int bracket =
+      test::add_box(s, {-0.02f, 0.98f, -2.0f}, {0.02f, 1.02f, -1.9f}, "wall_bracket");
+  s.meshes[size_t(wall)].node_index = 0;
+  s.meshes[size_t(bracket)].node_index = 0;  // one node, one region: the bracket's and wall's
+  s.lights = {test::point_light("torch", {0.0f, 1.0f, -1.87f}, 3.0f, true)};
+  test::finish(s);
+  cook(c, 64, draft(false));
+  ASSERT_FALSE(HasFatalFailure());
+  const nlohmann::json& enc = c.report.root()["pack"]["encoding"];
+  EXPECT_GE(enc.value("patches_cut_for_range", 0), 1) << "no tile spans more than 8 bits here";
+  CpuRecomposer cpu;
+  Error error;
+  ASSERT_EQ(cpu.init(c.pack, &error), Status::kOk) << error.message;
+  SceneState state;
+  ASSERT_EQ(state.init(c.pack, &error), Status::kOk) << error.message;
+  ASSERT_EQ(cpu.apply(state), Status::kOk);
+  Progress progress(true);
+  Report report;
+  FloatImage want =
+      bake_state(c.scene, c.layout, c.texels, *c.tracer, StateSpec{}, c.options, progress, report);
+  finalize_map(want, c.scene, c.layout, c.texels);
+  // Every wall texel of at least 4 output steps within a quarter of its light, and the wall's
+  // light as a whole within 2 %.
+  const double step = c.maps.output_step;
+  int judged = 0, lost = 0;
+  double sum_want = 0.0, sum_got = 0.0, bracket_peak = 0.0;
+  for (size_t t = 0; t < c.texels.valid.size(); ++t) {
+    if (!c.texels.valid[t]) continue;
+    double w = 0.0, g = 0.0;
+    for (size_t k = 0; k < 3; ++k) {
+      w = std::max(w, double(want.data[t * 3 + k]));
+      g = std::max(g, double(cpu.rgb()[t * 3 + k]));
+    }
+    if (c.texels.mesh[t] == bracket) bracket_peak = std::max(bracket_peak, w);
+    if (c.texels.mesh[t] != wall || w < 4.0 * step) continue;
+    ++judged;
+    lost += std::fabs(g - w) > 0.25 * w ? 1 : 0;
+    sum_want += w;
+    sum_got += g;
+  }
+  std::printf(
+      "  bracket peak %.0f steps; %d wall texels of 4 steps or more, %d off by over 25 %%; "
+      "their light %.4f of bake_state's\n",
+      bracket_peak / step, judged, lost, sum_got / sum_want);
+  EXPECT_GT(bracket_peak, 1000.0 * step) << "the bracket should take thousands of steps";
+  EXPECT_GT(judged, 100);
+  EXPECT_EQ(lost, 0);
+  EXPECT_NEAR(sum_got / sum_want, 1.0, 0.02);
+}
+
 // A closed grey room of albedo `albedo` with a crate, a semi-dynamic lamp and a static fill light,
 // cooked at draft. Light bounces hundreds of times at an albedo near 1: fewer rays keep it fast.
 void cook_closed_room(Cooked& c, float albedo) {
