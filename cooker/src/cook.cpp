@@ -106,9 +106,10 @@ PackOptions pack_options(const BakeOptions& bake) {
   po.pane_level = bake.pane_level >= 0 ? bake.pane_level : kDefaultPaneLevel;
   po.max_patch_level = bake.max_patch_level >= 0 ? bake.max_patch_level : kDefaultMaxPatchLevel;
   po.level_tolerance = bake.level_tolerance > 0.0f ? bake.level_tolerance : kDefaultLevelTolerance;
-  po.bounce_tolerance =
-      std::max(bake.bounce_tolerance > 0.0f ? bake.bounce_tolerance : kDefaultBounceTolerance,
-               po.level_tolerance);
+  const float preset_bounce =
+      bake.quality == Quality::kProduction ? kProductionBounceTolerance : kDefaultBounceTolerance;
+  po.bounce_tolerance = std::max(
+      bake.bounce_tolerance > 0.0f ? bake.bounce_tolerance : preset_bounce, po.level_tolerance);
   return po;
 }
 

@@ -913,10 +913,11 @@ int verb_accuracy(Args& args) {
     }
     const auto t = std::chrono::steady_clock::now();
     Report report;
-    PackOptions pack_options;
-    pack_options.encoding = setting.encoding;
-    const std::vector<uint8_t> pack =
-        build_pack(scene, prepared->layout, reuse->maps, pack_options, report);
+    // The pack `cook` makes of this setting (its preset's tolerances, the panes' level), in the
+    // row's encoding.
+    PackOptions po = pack_options(setting.bake);
+    po.encoding = setting.encoding;
+    const std::vector<uint8_t> pack = build_pack(scene, prepared->layout, reuse->maps, po, report);
     row.cook_s = reuse->seconds + since(t);
     row.rays = reuse->rays;
     row.pack_bytes = pack.size();
@@ -970,10 +971,10 @@ int verb_accuracy(Args& args) {
     for (EncodingPolicy e :
          {EncodingPolicy::kAuto, EncodingPolicy::kLinear, EncodingPolicy::kSquare}) {
       Report report;
-      PackOptions pack_options;
-      pack_options.encoding = e;
+      PackOptions po = pack_options(source->setting.bake);
+      po.encoding = e;
       const std::vector<uint8_t> pack =
-          build_pack(scene, ref_layout.layout, source->maps, pack_options, report);
+          build_pack(scene, ref_layout.layout, source->maps, po, report);
       RuntimeRow cpu;
       cpu.encoding = encoding_name(e);
       cpu.target = "cpu-float32";

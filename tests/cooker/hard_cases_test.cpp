@@ -999,7 +999,9 @@ TEST(HardCases, DirectAndBouncePartsSaveBytesAndStayWithinTheBounceTolerance) {
   EXPECT_EQ(d["maps_with_direct_part"].get<int>(), 4);  // B, C_lamp, S_crate,lamp, B - B_crate
   EXPECT_GT(d["maps_in_parts"].get<int>(), 0);
   EXPECT_EQ(da["maps_in_parts"].get<int>(), 4);
-  EXPECT_LT(double(atlas_bytes(parts.pack)), 0.9 * double(atlas_bytes(whole)));  // 0.867x
+  // 0.920x (0.867x before each map's bounce tolerance was capped at half its own light there,
+  // pack_builder.cpp kBounceShare: the parts save less where the tolerance is tighter).
+  EXPECT_LT(double(atlas_bytes(parts.pack)), 0.95 * double(atlas_bytes(whole)));
   // Chosen per set of charts that no patch leaves (some maps in parts on some surfaces and whole
   // on others), and never so that a light's change draws more texels than the costliest light
   // change of the whole maps' pack.
@@ -1016,7 +1018,11 @@ TEST(HardCases, DirectAndBouncePartsSaveBytesAndStayWithinTheBounceTolerance) {
       (unsigned long long)costliest_light_change(whole),
       (unsigned long long)costliest_light_change(parts.pack),
       (unsigned long long)costliest_light_change(all_parts));
-  EXPECT_LE(costliest_light_change(parts.pack), costliest_light_change(whole));
+  // The builder's bound is its own cut of each map whole, at the bounce tolerance; this whole
+  // maps' pack has no direct parts, so it is cut at the level tolerance everywhere: within 1 %
+  // (25,301 against 25,150 texels; the same texels before the bounce tolerance's per-map cap).
+  EXPECT_LE(double(costliest_light_change(parts.pack)),
+            1.01 * double(costliest_light_change(whole)));
   expect_standard_states_match(parts);
   // Against the whole maps' pack, state by state, in output steps at every valid texel: within
   // the bounce part's tolerance, the direct part's and the whole pack's level tolerance (1 each)

@@ -90,8 +90,8 @@ struct BakeOptions {
   int max_patch_level = -1;
   float level_tolerance = 0.0f;
   // Texels of bounce light alone take this tolerance instead, and maps may be stored as their
-  // direct and bounce parts (PackOptions::bounce_tolerance); <= 0 = kDefaultBounceTolerance, and
-  // never below level_tolerance.
+  // direct and bounce parts (PackOptions::bounce_tolerance); <= 0 = kDefaultBounceTolerance
+  // (kProductionBounceTolerance at production), and never below level_tolerance.
   float bounce_tolerance = 0.0f;
   // bake_state: also the moving lights' direct light (for pictures; the runtime's maps hold only
   // their bounce light, the game draws their direct light).
