@@ -61,7 +61,7 @@ constexpr float kBounceThresholdFraction = 0.5f;
 // small inn (preview) had 120 texels that matter with under half their light against
 // `bake-state` and 1,054 off by over 25 % (two or three lights each losing up to 3 steps of a
 // texel that shows 6-12); at 0.5, 0 and 160 for 7 % more atlas bytes; at 0.25, 0 and 29 for 11 %
-// (README, "Each map's share of the bounce tolerance").
+// (README, "8-bit codes that keep every texel, and each map's share of the bounce tolerance").
 constexpr float kBounceShare = 0.5f;
 
 // What a light-map patch costs where the pack builder weighs cuts and parts: its atlas bytes, its

@@ -30,7 +30,8 @@ constexpr float kDefaultBounceTolerance = 3.0f;
 // 8-bit rounding's own error to the bake. room_soft (128 page) against the path tracer: max error
 // beyond its noise 21.9 % -> 11.1 %, the bake's own; the small inn (512 page) against
 // `bake-state`: the 99.9th percentile of texels' relative error 29.1 % -> 14.9 %, for 5 % more
-// atlas bytes (README, "Each map's share of the bounce tolerance").
+// atlas bytes (README, "8-bit codes that keep every texel, and each map's share of the bounce
+// tolerance").
 constexpr float kProductionBounceTolerance = 1.0f;
 
 struct PackOptions {
@@ -67,13 +68,13 @@ struct PackOptions {
   // Direct and bounce parts. Where a map has a direct part (ShadowMap::direct) and no indirect
   // part, its texels without direct light (bounce light alone) take this tolerance instead of
   // level_tolerance, capped at the light the authored image shows at the texel (in output steps:
-  // a blur lifts dark texels, and every map's error adds up there) and never below
-  // level_tolerance; and the map is stored as its direct part's patches plus its bounce part's
-  // (the map less the direct part, significant from a fraction of the map's threshold, within
-  // that tolerance at every texel) where that costs less: atlas bytes, records, kPatchDrawBytes
-  // a patch and kDrawTexelBytes a texel drawn (patch_extract.h). A map whose threshold is a step
-  // of its own peak (a light far dimmer than the authored exposure) keeps level_tolerance. In
-  // output steps like level_tolerance; >= level_tolerance.
+  // a blur lifts dark texels, and every map's error adds up there) and at half of the map's own
+  // light there, and never below level_tolerance; and the map is stored as its direct part's
+  // patches plus its bounce part's (the map less the direct part, significant from a fraction of
+  // the map's threshold, within that tolerance at every texel) where that costs less: atlas bytes,
+  // records, kPatchDrawBytes a patch and kDrawTexelBytes a texel drawn (patch_extract.h). A map
+  // whose threshold is a step of its own peak (a light far dimmer than the authored exposure) keeps
+  // level_tolerance. In output steps like level_tolerance; >= level_tolerance.
   float bounce_tolerance = kDefaultBounceTolerance;
   // Store every map that has a direct part as its two parts, whatever it costs (tests).
   bool always_parts = false;
