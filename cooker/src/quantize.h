@@ -15,9 +15,9 @@ namespace lightpatch::cooker {
 // patch's encoding is said not to hold it: one output step (twice SourcePatch::threshold), or
 // 1/kRelativeAllowance of v where that is more (no 8-bit code keeps a bright texel within a fixed
 // step; the square encoding's rounding near its top is about 1/255 of the value). In 8 bits, a
-// patch whose values span more than about 255 steps cannot keep its dim texels linearly: a
-// torch's own flame mesh (390 at intensity 1) and the wall beside it (0.47) in one patch rounded
-// the wall's light to 0.
+// patch whose values span more than about 255 steps cannot keep its dim texels linearly: the end
+// of a torch's bracket 3 cm from the light (390 at intensity 1) and the wall beside it (0.47) in
+// one patch rounded the wall's light to 0.
 constexpr double kRelativeAllowance = 128.0;
 double quantization_allowance(double value, double threshold, double scale);
 
@@ -49,13 +49,13 @@ uint8_t encode_value(float v, float scale, uint8_t encoding);
 QuantizedPatch quantize_patch(const SourcePatch& patch, EncodingPolicy policy);
 
 // Appends `patch` and its quantization to `out`, or, where the patch is at level 0 and no
-// encoding holds every significant texel within its allowance (a light's own flame beside the
-// wall it lights, in one tile), the pieces it is cut into (cut_patch's rules: pieces shrunk to the
+// encoding holds every significant texel within its allowance (a torch's bracket beside the wall
+// it lights, in one tile), the pieces it is cut into (cut_patch's rules: pieces shrunk to the
 // texels that carry light, empty ones dropped): the box of its texels brighter than linear codes
 // keep a step beside (510 steps) and the bands around it, which then hold; then a piece that
-// still does not hold into its charts (`regions`, light-map patches: a flame is a chart of its
-// own). A piece that still does not hold is kept as it is (pack.encoding.patches_beyond_allowance
-// counts them). Returns the patches added.
+// still does not hold into its charts (`regions`, light-map patches: the bracket's faces are
+// charts of their own). A piece that still does not hold is kept as it is
+// (pack.encoding.patches_beyond_allowance counts them). Returns the patches added.
 size_t split_for_range(SourcePatch patch, const std::vector<Region>* regions, EncodingPolicy policy,
                        std::vector<SourcePatch>& out, std::vector<QuantizedPatch>& quantized);
 

@@ -36,16 +36,16 @@ double worst_over_allowance(const SourcePatch& p, const QuantizedPatch& q) {
   return worst;
 }
 
-// The small inn's torch: its own flame mesh gets 390 (at intensity 1) from the light inside it,
+// The small inn's torch: the end of its bracket, 3 cm from the light, gets 390 (at intensity 1),
 // the wall beside it 0.47 and less, in one patch. Linear codes step by 390 / 255 = 1.5: every wall
 // texel rounded to 0 (the wall 1.9 -> 0.13 in the recomposed map, where `bake-state` has 1.9).
-TEST(PatchQuantize, AFlameBesideAWallKeepsTheWallsLight) {
+TEST(PatchQuantize, ABracketBesideATorchKeepsTheWallsLight) {
   const float half_step = 0.0027f;  // the torch's half output step at intensity 1
   const SourcePatch p =
       row({389.4f, 375.7f, 182.9f, 0.47f, 0.3f, 0.12f, 0.05f, 0.02f, 0.006f}, half_step);
   const QuantizedPatch q = quantize_patch(p, EncodingPolicy::kAuto);
   EXPECT_EQ(q.encoding, pack::kEncodingSquare);
-  // Linear would have lost the wall: its squared error is the smaller (the flame's texels weigh
+  // Linear would have lost the wall: its squared error is the smaller (the bracket's texels weigh
   // most), so the choice by squared error alone kept it.
   EXPECT_LT(q.error[0].sum_sq_error, q.error[1].sum_sq_error);
   EXPECT_GT(q.error[0].worst_over_allowance, 50.0);
