@@ -100,6 +100,26 @@ TEST(FarmCli, JobsInSeparateProcessesGiveTheCooksBytes) {
   EXPECT_EQ(std::filesystem::last_write_time(result), before);
 }
 
+// A moving light's panes are made where the jobs are assembled, from the gather rays the gather
+// job wrote (which texels bounce light and which are buried): the same panes and bytes as cook.
+TEST(FarmCli, AMovingLightsPanesFromTheGatherJobGiveTheCooksBytes) {
+  ScratchDir dir;
+  two_rooms_lantern().write(dir.file("rooms.glb"));
+  ok(cat({"cook", dir.file("rooms.glb"), "-o", dir.file("cook.lpk")}, kFast));
+  const std::string jobs = dir.file("jobs");
+  const std::vector<std::string> names =
+      lines(ok(cat({"plan", dir.file("rooms.glb"), "-o", jobs}, kFast)).out);
+  ASSERT_GE(names.size(), 2u);
+  EXPECT_EQ(names[0].rfind("gather-", 0), 0u);
+  std::vector<std::string> run = {"cook-job", jobs};
+  run.insert(run.end(), names.begin(), names.end());
+  run.push_back("--quiet");
+  ok(run);
+  ok({"assemble", jobs, "-o", dir.file("farm.lpk"), "--quiet"});
+  EXPECT_TRUE(read_bytes(dir.file("farm.lpk")) == read_bytes(dir.file("cook.lpk")))
+      << "the assembled pack differs from cook's";
+}
+
 TEST(FarmCli, AssembleNamesMissingAndCorruptedResultsAndWritesNothing) {
   ScratchDir dir;
   write_room(dir.file("room.glb"));

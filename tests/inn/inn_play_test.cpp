@@ -252,12 +252,13 @@ TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
 
   // The lantern walk, at its first pose (in the dining room) and its third (in the doorway): the
   // lantern's bounce light as the pack recomposes it (lantern on less lantern off) against
-  // bake-state of the same two states (the cook's draft preset). Measured with the panes at level
-  // 1 (the default): 42.6 % relative RMSE, bias -23.5 %, median ratio 1.02 (dining room); 41.2 %,
-  // -4.2 %, 0.97 (doorway); at level 0 41.8 %, -22.6 %, 1.03 and 41.1 %, -2.4 %, 0.98: issue
-  // 16's 10 % is not met (docs/moving_lights.md). Panes left at the lantern's hook (the
-  // recomposition of the hook's pose against the same bake-state) give 51.9 %, -45.1 % and 79.5 %,
-  // -33.2 %, median 0.72: each pose outside a bound below.
+  // bake-state of the same two states (the cook's draft preset). Measured at the default 64 panes,
+  // level 1: 22.7 % relative RMSE, bias -2.6 %, median ratio 0.97 (dining room); 25.0 %, -3.4 %,
+  // 0.96 (doorway); 35.1 %, -10.1 %, 1.14 and 33.1 %, -10.7 %, 0.91 before the panes kept to
+  // texels whose light bounces and were split by how unevenly a light lights them: issue 16's
+  // 10 % is not met (docs/moving_lights.md). Panes left at the lantern's hook (the recomposition
+  // of the hook's pose against the same bake-state) gave 51.9 %, -45.1 % and 79.5 %, -33.2 %,
+  // median 0.72 (32 panes): each pose outside a bound below.
   ASSERT_EQ(moves.size(), 5u);
   for (const size_t k : {size_t(0), size_t(2)}) {
     SCOPED_TRACE(moves[k]);
@@ -288,7 +289,7 @@ TEST(InnPlay, ScriptedScenarioLandsWithinBoundsAndLightsBrighten) {
     ASSERT_FALSE(maps[0].empty());
     const BounceError e = bounce_error(maps[0], maps[1], maps[2], maps[3]);
     EXPECT_GT(e.texels, maps[0].size() / 3 / 4);  // the bounce light reaches much of the inn
-    EXPECT_LT(e.relative_rmse, 0.55);
+    EXPECT_LT(e.relative_rmse, 0.32);
     EXPECT_LT(std::fabs(e.bias), 0.35);
     EXPECT_GT(e.median_ratio, 0.75);
     EXPECT_LT(e.median_ratio, 1.35);

@@ -30,6 +30,9 @@ void BakeSession::bake_panes(BakedMaps& maps, Progress& progress, Report& report
   PaneClusterOptions co;
   co.panes = b.options.panes > 0 ? b.options.panes : kDefaultPanes;
   co.threads = b.threads;
+  // Irradiance on a texel no gather ray reads bounces nowhere: a pane there would be wasted.
+  const std::vector<uint8_t> senders = b.indirect->read_texels();
+  co.senders = &senders;
   maps.panes = cluster_panes(scene, texels, b.tracer, co);
   const double cluster_s = progress.end();
 

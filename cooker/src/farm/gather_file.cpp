@@ -14,14 +14,14 @@ namespace lightpatch::cooker {
 static_assert(std::endian::native == std::endian::little, "the format is little-endian");
 // Every field of the operator is written below: a field added to gather.h must be added here
 // (and the version bumped), or a loaded operator would lack it.
-// (Sizes on 64-bit libstdc++: 3 ints and 13 vectors; the grid and 21 more fields.)
+// (Sizes on 64-bit libstdc++: 3 ints and 13 vectors; the grid and 22 more fields.)
 static_assert(sizeof(CoarseGrid) == 328, "CoarseGrid changed: update gather_file.cpp");
-static_assert(sizeof(GatherOperator) == 696, "GatherOperator changed: update gather_file.cpp");
+static_assert(sizeof(GatherOperator) == 720, "GatherOperator changed: update gather_file.cpp");
 
 namespace {
 
 constexpr char kMagic[8] = {'L', 'P', 'G', 'A', 'T', 'H', 'E', 'R'};
-constexpr uint32_t kVersion = 3;
+constexpr uint32_t kVersion = 4;
 
 struct GatherScalars {
   int32_t level, width, height, rays, tiles_x, tiles_y;
@@ -219,6 +219,7 @@ std::vector<uint8_t> encode_gather(const GatherOperator& op, const std::array<ui
   w.array(op.tile_of);
   w.nested(op.tile_coarse);
   w.nested(op.sources);
+  w.array(op.buried);
   GatherFileHeader h{};
   std::memcpy(h.magic, kMagic, sizeof kMagic);
   h.version = kVersion;
@@ -350,6 +351,9 @@ GatherOperator decode_gather(const uint8_t* data, size_t size, const GatherFileE
   check_indices(op.tile_of, tiles, false, "tile_of");
   op.tile_coarse = in.nested("tile_coarse", tiles, uint32_t(nc));
   op.sources = in.nested("sources", tiles, uint32_t(tiles));
+  op.buried = in.array<uint8_t>("buried", e.texels);
+  for (uint8_t b : op.buried)
+    if (b > 1) throw CookError("gather file: bad value in buried");
   if (in.left() != 0) throw CookError("gather file: bytes after the last array");
   return op;
 }

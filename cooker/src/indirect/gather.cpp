@@ -712,6 +712,7 @@ GatherOperator build_gather(const Scene& scene, const Layout& layout, const Texe
   }
   for (size_t c = 0; c < nc; ++c) op.near_offset[c + 1] += op.near_offset[c];
   for (uint8_t v : buried) op.buried_texels += v;
+  op.buried = std::move(buried);
   {
     double sum = 0.0, count = 0.0;
     for (size_t c = 0; c < nc; ++c) {

@@ -167,6 +167,9 @@ struct GatherOperator {
   // The level of the series' b-th bounce (0-based).
   static int level_of(int bounce) { return bounce < kLevels ? bounce : kLevels - 1; }
   size_t buried_texels = 0;
+  // Per light-map texel, 1 where it is buried (its sample point inside solid geometry: its rays
+  // are dropped, and rays that land on it go to a neighbour that is not).
+  std::vector<uint8_t> buried;
   // Mean albedo (largest channel) over the texels that gather, at most 0.995: how slowly the
   // bounce series converges.
   float mean_albedo = 0.0f;

@@ -187,6 +187,30 @@ class GatherIntegrator final : public IndirectIntegrator {
     count(st, states_);
   }
 
+  std::vector<uint8_t> read_texels() const override {
+    auto buried = [&](size_t t) { return t < op_.buried.size() && op_.buried[t] != 0; };
+    // hit: some ray lands on the coarse texel; sees: some ray of its own lands on a surface (the
+    // outside of a closed room sees nothing, though a grazing ray from a floor texel whose sample
+    // point lies on the room's outer edge may land on it).
+    const size_t nc = op_.grid.size(), rays = size_t(op_.rays);
+    std::vector<uint8_t> hit(nc, 0), sees(nc, 0);
+    for (size_t c = 0; c < nc; ++c)
+      for (size_t k = 0; k < rays; ++k) {
+        const uint32_t h = op_.hit[c * rays + k];
+        if (h == kNoTexel) continue;
+        hit[h] = 1;
+        sees[c] = 1;
+      }
+    std::vector<uint8_t> read(b_.texels.valid.size(), 0);
+    for (size_t t = 0; t < read.size(); ++t) {
+      const uint32_t c = op_.grid.coarse_of[t];
+      if (c != kNoTexel && hit[c] && sees[c] && !buried(t)) read[t] = 1;
+    }
+    for (const NearHit& h : op_.near)
+      if (h.fine < read.size() && !buried(h.fine)) read[h.fine] = 1;
+    return read;
+  }
+
   nlohmann::json describe() const override {
     return {
         {"integrator", "gather"},

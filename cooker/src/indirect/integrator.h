@@ -103,6 +103,11 @@ class IndirectIntegrator {
   virtual void add_state(const FloatImage& direct, const PointLight* points,
                          const std::vector<uint8_t>& present, float threshold,
                          FloatImage& fine) const = 0;
+  // Per light-map texel, 1 where some gather ray reads its light (a ray's static hit lands on its
+  // coarse texel, or a near hit on the texel itself), its own rays see some surface and it is not
+  // buried in solid geometry, else 0: light on the others (the outside of a closed room, a floor
+  // under a rug, which no light reaches either) bounces to no texel.
+  virtual std::vector<uint8_t> read_texels() const = 0;
   // Settings and statistics for the report.
   virtual nlohmann::json describe() const = 0;
 };

@@ -17,13 +17,20 @@ namespace lightpatch::cooker {
 struct PaneClusterOptions {
   int panes = 32;  // panes before the line-of-sight refinement (at most four times this after it)
   int threads = 1;
+  // Per light-map texel, 0 for a texel to leave out of every pane (IndirectIntegrator::
+  // read_texels(): no gather ray reads its light, so irradiance on it bounces nowhere); null:
+  // every texel the clustering takes.
+  const std::vector<uint8_t>* senders = nullptr;
 };
 
-// Clusters the valid texels of static meshes that stop rays (not a flame, not an object) into
-// panes: by the dominant axis of their normal, then split at the median of the longest side of
-// the widest pane until there are options.panes, then every pane whose entry points do not all
-// see its eye split again (a pane must not reach round a wall), up to four times as many.
-// Deterministic. Returns the panes with record (light 0) and texels set, maps empty.
+// Clusters the valid texels of static meshes that stop rays (not a flame, not an object; only
+// options.senders where given) into panes: by the dominant axis of their normal, then split at
+// the median of the longest side of the widest pane until there are options.panes; then, up to
+// four times as many, the pane a light in front of it lights most unevenly (its entry points'
+// irradiance from lights standing in front of them, with visibility, spread about their mean;
+// times its texels) is split again, as is a pane whose entry points do not all see its eye (a
+// pane must not reach round a wall). Deterministic. Returns the panes with record (light 0) and
+// texels set, maps empty.
 std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
                                    const PaneClusterOptions& options);
 
