@@ -332,10 +332,16 @@ struct BoxRoomGather {
   test::Prepared f = test::prepare(box.scene, 64);
   GatherOperator op;
   GatherReach reach;
-  BoxRoomGather() {
+  // near_hits: with the texels' footprints, so that rays into the corners are near hits.
+  explicit BoxRoomGather(bool near_hits = false) {
     GatherOptions go;
     go.rays = 64;
     go.threads = 2;
+    std::vector<TexelFootprint> footprints;
+    if (near_hits) {
+      footprints = texel_footprints(f.texels, f.tracer.get(), 2);
+      go.footprints = &footprints;
+    }
     op = build_gather(box.scene, f.layout, f.texels, *f.tracer, 2, go);
     reach = gather_reach(op, 2);
   }
@@ -382,6 +388,16 @@ TEST(Indirect, ReachVisitsFewerReceiversAndGivesTheSameBits) {
   }
 }
 
+// A batched solve `solve(options, first)` as asked (first = true) and one thread wide: a batch's
+// results must not depend on the thread count.
+template <typename Solve>
+auto two_ways(const SolveOptions& so, Solve&& solve) {
+  SolveOptions one = so;
+  one.threads = 1;
+  auto asked = solve(so, true);
+  return std::make_pair(std::move(asked), solve(one, false));
+}
+
 // solve_changes (solve.h) runs several changes side by side, each bounce's gathers sharing one
 // pass over the stored rays: each job must get the bits it gets alone, whatever its batch (more
 // jobs than kChangeBatch, sparse and dense sources, one object, both, none), on any thread count.
@@ -412,10 +428,9 @@ TEST(Indirect, BatchedChangesEqualEachChangeSolvedAlone) {
     jobs.push_back(std::move(job));
   }
   std::vector<SolveStats> stats;
-  const std::vector<CoarseMap> together = solve_changes(op, e, jobs, so, &stats);
-  SolveOptions one = so;
-  one.threads = 1;
-  const std::vector<CoarseMap> single_thread = solve_changes(op, e, jobs, one);
+  const auto [together, single_thread] = two_ways(so, [&](const SolveOptions& o, bool first) {
+    return solve_changes(op, e, jobs, o, first ? &stats : nullptr);
+  });
   ASSERT_EQ(together.size(), jobs.size());
   ASSERT_EQ(stats.size(), jobs.size());
   bool some_differ = false;
@@ -432,6 +447,66 @@ TEST(Indirect, BatchedChangesEqualEachChangeSolvedAlone) {
       some_differ = true;
   }
   EXPECT_TRUE(some_differ) << "the jobs should not all give one map";
+}
+
+// solve_indirect_many (solve.h) solves several group sources side by side (the moving lights'
+// panes), each bounce's gathers sharing one pass over the stored rays: each source must get the
+// bits solve_indirect gives it alone, whatever its batch (more than kChangeBatch, sources on a
+// few tiles and dense ones, with and without near sources), on any thread count.
+TEST(Indirect, SourcesSolvedSideBySideEqualEachSolvedAlone) {
+  const BoxRoomGather box(/*near_hits=*/true);
+  const GatherOperator& op = box.op;
+  ASSERT_GT(op.near.size(), 0u);
+  const size_t nc = op.grid.size();
+  SolveOptions so;
+  so.tolerance = 1e-5f;
+  so.max_bounces = 12;
+  so.threads = 2;
+  so.reach = &box.reach;
+  const NearIndex index = near_index(op);
+  so.near = &index;
+  std::vector<CoarseMap> sources;
+  for (size_t j = 0; j < kChangeBatch + 3; ++j) {
+    CoarseMap src(nc, glm::vec3(0.0f));
+    // A pane's texels on a few tiles, a different set each; every fifth dense.
+    for (size_t c = 0; c < nc; ++c)
+      if (j % 5 == 4 || op.tile_of[c] % (j + 2) == 0)
+        src[c] = glm::vec3(0.2f * float(j + 1), 0.1f, 0.05f * float(c % 3));
+    sources.push_back(std::move(src));
+  }
+  // Near sources for every other job (a third of the near hits each), none for the others.
+  std::vector<NearSource> near(sources.size());
+  std::vector<const NearSource*> near_of(sources.size(), nullptr);
+  for (size_t j = 0; j < sources.size(); j += 2) {
+    for (uint32_t i = 0; i < op.near.size(); i += 3) near[j].push_back({i, glm::vec3(0.3f)});
+    near_of[j] = &near[j];
+  }
+  std::vector<SolveStats> stats;
+  const auto [together, single_thread] = two_ways(so, [&](const SolveOptions& o, bool first) {
+    return solve_indirect_many(op, sources, near_of, o, first ? &stats : nullptr);
+  });
+  ASSERT_EQ(together.size(), sources.size());
+  ASSERT_EQ(single_thread.size(), sources.size());
+  ASSERT_EQ(stats.size(), sources.size());
+  auto same = [&](const CoarseMap& a, const CoarseMap& b) {
+    return a.size() == nc && b.size() == nc &&
+           std::memcmp(a.data(), b.data(), nc * sizeof(a[0])) == 0;
+  };
+  bool some_differ = false;
+  for (size_t j = 0; j < sources.size(); ++j) {
+    SolveStats alone_stats;
+    const Bounces alone = solve_indirect(op, {}, sources[j], so, &alone_stats, near_of[j]);
+    for (const Bounces* b : {&together[j], &single_thread[j]}) {
+      EXPECT_TRUE(same(alone.first, b->first)) << j;
+      EXPECT_TRUE(same(alone.second, b->second)) << j;
+      EXPECT_TRUE(same(alone.rest, b->rest)) << j;
+    }
+    EXPECT_EQ(alone_stats.bounces, stats[j].bounces) << j;
+    EXPECT_EQ(alone_stats.gathers, stats[j].gathers) << j;
+    EXPECT_GT(stats[j].bounces, 2) << j;  // a series, not just a first bounce
+    if (j > 0 && !same(together[j].total(), together[0].total())) some_differ = true;
+  }
+  EXPECT_TRUE(some_differ) << "the sources should not all give one map";
 }
 
 // Near hits (gather.h NearHit): gather rays that land within two texels of where they leave

@@ -122,6 +122,36 @@ class GatherIntegrator final : public IndirectIntegrator {
     return g;
   }
 
+  std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
+                                        std::vector<PointLight> points, float threshold,
+                                        int threads) const override {
+    const size_t n = direct.size();
+    std::vector<CoarseMap> sources(n);
+    std::vector<NearSource> near(n);
+    std::vector<const NearSource*> near_of(n, nullptr);
+    parallel_for(int(n), threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      sources[j] = coarse_source(op_, b_.texels, direct[j]);
+      direct[j] = FloatImage();
+      if (j < points.size() && !points[j].data.empty()) {
+        near[j] = near_source(points[j]);
+        near_of[j] = &near[j];
+        points[j] = PointLight();
+      }
+    });
+    std::vector<SolveStats> st;
+    std::vector<Bounces> bounces =
+        solve_indirect_many(op_, sources, near_of, options(threshold, threads), &st);
+    std::vector<GroupBounce> out(n);
+    for (size_t j = 0; j < n; ++j) {
+      count(st[j], groups_);
+      out[j].indirect = bounces[j].total();
+      out[j].peak = peak(out[j].indirect);
+      out[j].bounces = st[j].bounces;
+    }
+    return out;
+  }
+
   std::vector<BounceMap> changes(const GroupBounce& group,
                                  const std::vector<ChangeRequest>& requests, float threshold,
                                  int threads, std::vector<double>* seconds,
@@ -172,6 +202,12 @@ class GatherIntegrator final : public IndirectIntegrator {
     add_magnified(op_.grid, b_.texels, map, fine);
     const int s = b_.layout.align;
     if (s > 1 && blocks) *blocks = block_image(op_.grid, b_.texels, s, map);
+  }
+
+  float add_blocks(BounceMap map, FloatImage& blocks) const override {
+    denoise(op_.grid, denoise_, map);
+    blocks = block_image(op_.grid, b_.texels, b_.layout.align, map);
+    return magnified_peak(op_.grid, b_.texels, map);
   }
 
   void add_state(const FloatImage& direct, const PointLight* points,

@@ -77,6 +77,13 @@ class IndirectIntegrator {
   // `points`: the same light at direct_points() (null when it has none).
   virtual GroupBounce prepare(const FloatImage& direct, const PointLight* points,
                               float threshold) const = 0;
+  // prepare() of several direct lights at once, `threads` wide, each the same bits as alone but
+  // without `sends` (for light no object changes: the moving lights' panes); lights whose
+  // receivers overlap share each bounce's pass over the integrator's rays. `points`: empty, or
+  // one per light (an empty image: none). Each image is freed once read.
+  virtual std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
+                                                std::vector<PointLight> points, float threshold,
+                                                int threads) const = 0;
   // What the objects of each request change in a prepared group's bounce light,
   // I(no object) - I(present), given the direct light they block: for each request the map it
   // would get alone. Solved together, `threads` wide, so that several share each pass over the
@@ -97,6 +104,10 @@ class IndirectIntegrator {
   // may be negative where the indirect map's bilinear filter blends across a crease inside a
   // chart. Without one `blocks` is left as it is.
   virtual void add(BounceMap map, FloatImage& fine, FloatImage* blocks) const = 0;
+  // add()'s block image of a map (Layout::align > 1) into `blocks` and the largest finite value
+  // add() would add to a zero map, without the light-map-sized map: for maps the pack holds on
+  // the indirect map alone (the moving lights' panes).
+  virtual float add_blocks(BounceMap map, FloatImage& blocks) const = 0;
   // A whole state's bounce light from its direct light (3 channels; `points` at direct_points(),
   // null when it has none) with the objects `present`,
   // added to `fine` as add() does. `threshold`: the finest significance among the state's groups.

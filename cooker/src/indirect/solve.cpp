@@ -539,6 +539,37 @@ Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& pre
   return std::move(s.out);
 }
 
+std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
+                                         const std::vector<CoarseMap>& sources,
+                                         const std::vector<const NearSource*>& near,
+                                         const SolveOptions& options,
+                                         std::vector<SolveStats>* stats) {
+  const size_t n = sources.size();
+  if (stats) stats->assign(n, SolveStats{});
+  const PresentCrossings none;  // no object present: no ray changes
+  std::vector<std::vector<uint32_t>> receivers(n);
+  std::vector<Series> series(n);
+  std::vector<GatherJob> jobs(n);
+  parallel_for(int(n), std::min(options.threads, int(n)), [&](int jj) {
+    const size_t j = size_t(jj);
+    receivers[j] = receivers_of(op, sources[j], options.reach, 0);
+    series[j].present = &none;
+    series[j].stats = stats ? &(*stats)[j] : nullptr;
+    series[j].first.assign(sources[j].size(), glm::vec3(0.0f));
+    jobs[j] = {&sources[j], &none, &receivers[j], &series[j].first};
+  });
+  gather_many(op, jobs, options.threads, 0);
+  for (size_t j = 0; j < n; ++j) {
+    if (j < near.size() && near[j])
+      add_near(op, *options.near, sources[j], *near[j], series[j].first);
+    if (stats) (*stats)[j].gathers += uint64_t(receivers[j].size()) * uint64_t(op.rays);
+  }
+  run_series(op, series, options);
+  std::vector<Bounces> out(n);
+  for (size_t j = 0; j < n; ++j) out[j] = std::move(series[j].out);
+  return out;
+}
+
 EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
                              const Bounces& bounces) {
   EmptyRadiance e;
@@ -839,8 +870,12 @@ FloatImage block_image(const CoarseGrid& grid, const TexelSet& texels, int s,
   return out;
 }
 
-void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
-                   FloatImage& fine, float scale) {
+namespace {
+
+// Calls out(x, y, v) with the magnified value v of every light-map texel (x, y) that has a
+// coarse texel: add_magnified's and magnified_peak's one rule.
+template <typename Out>
+void magnify(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map, Out&& out) {
   const int k = grid.level;
   const float inv_k = 1.0f / float(k);
   for (int y = 0; y < texels.height; ++y) {
@@ -884,9 +919,27 @@ void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseM
           if (n > 0.0f) v /= n;
         }
       }
-      for (int ch = 0; ch < 3; ++ch) fine.at(x, y, ch) += scale * v[ch];
+      out(x, y, v);
     }
   }
+}
+
+}  // namespace
+
+void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
+                   FloatImage& fine, float scale) {
+  magnify(grid, texels, map, [&](int x, int y, const glm::vec3& v) {
+    for (int ch = 0; ch < 3; ++ch) fine.at(x, y, ch) += scale * v[ch];
+  });
+}
+
+float magnified_peak(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map) {
+  float p = 0.0f;
+  magnify(grid, texels, map, [&](int, int, const glm::vec3& v) {
+    for (int ch = 0; ch < 3; ++ch)
+      if (std::isfinite(v[ch])) p = std::max(p, v[ch]);
+  });
+  return p;
 }
 
 float peak(const CoarseMap& map) {

@@ -95,6 +95,16 @@ Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& pre
                        const CoarseMap& source, const SolveOptions& options,
                        SolveStats* stats = nullptr, const NearSource* near = nullptr);
 
+// solve_indirect() of several sources with no object present, the same bits as each solved
+// alone, `options.threads` wide: sources whose receivers overlap enough share each bounce's pass
+// over the stored rays (gather_many), up to kChangeBatch. `near` (empty, or one per source, each
+// may be null) as solve_indirect's. `stats` (may be null) receives one entry per source.
+std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
+                                         const std::vector<CoarseMap>& sources,
+                                         const std::vector<const NearSource*>& near,
+                                         const SolveOptions& options,
+                                         std::vector<SolveStats>* stats = nullptr);
+
 // What a group sends on with no object present, by the series term that reads it: its direct
 // light's radiance source (read by the first bounce), albedo * its first bounce (read by the
 // second), albedo * its later bounces (read by the rest).
@@ -191,6 +201,10 @@ void denoise(const CoarseGrid& grid, const DenoiseWeights& weights, CoarseMap& m
 // Adds the coarse map, magnified bilinearly within each chart, to `fine` (3 channels), scaled.
 void add_magnified(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map,
                    FloatImage& fine, float scale = 1.0f);
+
+// The largest finite value add_magnified() adds to a zero map at scale 1 (0 if none is larger),
+// without the light-map-sized map.
+float magnified_peak(const CoarseGrid& grid, const TexelSet& texels, const CoarseMap& map);
 
 // The pack's indirect map of a coarse map, for a layout on s x s blocks (Layout::align = s > 1,
 // pack_format.h "Two target maps"): each block holds the mean, over its valid texels, of their
