@@ -104,18 +104,16 @@ void BakeSession::bake_panes(BakedMaps& maps, Progress& progress, Report& report
     const size_t first = size_t(batch) * kPaneBatch;
     const size_t count = std::min(kPaneBatch, n_panes - first);
     std::vector<FloatImage> direct(count);
-    std::vector<PointLight> at_points(points ? count : 0);
+    std::vector<SparsePointLight> at_points(points ? count : 0);
     for (size_t j = 0; j < count; ++j) {
       const size_t k = order[first + j];
       direct[j] = FloatImage(texels.width, texels.height, 1);
       for (uint32_t t : maps.panes[k].texels) direct[j].data[t] = 1.0f;
-      if (points) {
-        at_points[j] = PointLight(pts->width, pts->height, 1);
-        for (uint32_t p : points_in[k]) at_points[j].data[p] = 1.0f;
-      }
+      if (points)
+        for (uint32_t p : points_in[k]) at_points[j].push_back({p, glm::vec3(1.0f)});
     }
     std::vector<GroupBounce> solved =
-        b.indirect->prepare_many(std::move(direct), std::move(at_points), threshold, 1);
+        b.indirect->prepare_many(std::move(direct), at_points, threshold, 1);
     for (size_t j = 0; j < count; ++j) {
       PaneMap& pane = maps.panes[order[first + j]];
       // The pack stores a pane on the indirect map alone where its blocks divide the page

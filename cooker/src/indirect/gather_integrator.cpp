@@ -123,8 +123,8 @@ class GatherIntegrator final : public IndirectIntegrator {
   }
 
   std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
-                                        std::vector<PointLight> points, float threshold,
-                                        int threads) const override {
+                                        const std::vector<SparsePointLight>& points,
+                                        float threshold, int threads) const override {
     const size_t n = direct.size();
     std::vector<CoarseMap> sources(n);
     std::vector<NearSource> near(n);
@@ -133,10 +133,9 @@ class GatherIntegrator final : public IndirectIntegrator {
       const size_t j = size_t(jj);
       sources[j] = coarse_source(op_, b_.texels, direct[j]);
       direct[j] = FloatImage();
-      if (j < points.size() && !points[j].data.empty()) {
+      if (j < points.size()) {
         near[j] = near_source(points[j]);
         near_of[j] = &near[j];
-        points[j] = PointLight();
       }
     });
     std::vector<SolveStats> st;
@@ -292,6 +291,17 @@ class GatherIntegrator final : public IndirectIntegrator {
     return near_source_of(all, [&](size_t p) {
       const float* v = d.data.data() + p * ch;
       return ch == 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]);
+    });
+  }
+  // From the lit points alone: the same list as near_source(PointLight) of the image they fill.
+  NearSource near_source(const SparsePointLight& lit) const {
+    std::vector<uint32_t> listed(lit.size());
+    for (size_t i = 0; i < lit.size(); ++i) listed[i] = lit[i].first;
+    return near_source_of(listed, [&](size_t p) {
+      const auto it = std::lower_bound(
+          lit.begin(), lit.end(), p,
+          [](const std::pair<uint32_t, glm::vec3>& x, size_t q) { return x.first < q; });
+      return it->second;  // p is listed: it is in `lit`
     });
   }
   // From a sum of the passes' point maps: only the points its sparse maps wrote (an object's

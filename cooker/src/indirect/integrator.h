@@ -65,6 +65,9 @@ struct DirectPoints {
 
 // The direct light a pass or a state gives the DirectPoints, beside its light map.
 using PointLight = FloatImage;
+// The same where few points are lit: (point, RGB irradiance) in ascending point order, each point
+// at most once; the others 0.
+using SparsePointLight = std::vector<std::pair<uint32_t, glm::vec3>>;
 
 class IndirectIntegrator {
  public:
@@ -80,10 +83,11 @@ class IndirectIntegrator {
   // prepare() of several direct lights at once, `threads` wide, each the same bits as alone but
   // without `sends` (for light no object changes: the moving lights' panes); lights whose
   // receivers overlap share each bounce's pass over the integrator's rays. `points`: empty, or
-  // one per light (an empty image: none). Each image is freed once read.
+  // one per light, the light at direct_points() (a pane lights few of them). Each image is freed
+  // once read.
   virtual std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
-                                                std::vector<PointLight> points, float threshold,
-                                                int threads) const = 0;
+                                                const std::vector<SparsePointLight>& points,
+                                                float threshold, int threads) const = 0;
   // What the objects of each request change in a prepared group's bounce light,
   // I(no object) - I(present), given the direct light they block: for each request the map it
   // would get alone. Solved together, `threads` wide, so that several share each pass over the
