@@ -30,7 +30,7 @@ std::vector<uint32_t> in_space_order(const std::vector<PaneMap>& panes) {
     hi = glm::max(hi, e);
   }
   const glm::vec3 extent = glm::max(hi - lo, glm::vec3(1e-6f));
-  auto spread = [](uint32_t v) {  // 10 bits to every third of 30
+  auto interleave = [](uint32_t v) {  // 10 bits to every third of 30
     uint64_t x = v & 0x3FFu;
     x = (x | (x << 16)) & 0x30000FFull;
     x = (x | (x << 8)) & 0x300F00Full;
@@ -44,7 +44,7 @@ std::vector<uint32_t> in_space_order(const std::vector<PaneMap>& panes) {
     uint64_t key = 0;
     for (int a = 0; a < 3; ++a) {
       const float u = (r.eye[a] - lo[a]) / extent[a];
-      key |= spread(uint32_t(std::clamp(u, 0.0f, 1.0f) * 1023.0f)) << a;
+      key |= interleave(uint32_t(std::clamp(u, 0.0f, 1.0f) * 1023.0f)) << a;
     }
     keyed[i] = {key, uint32_t(i)};
   }

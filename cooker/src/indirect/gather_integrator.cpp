@@ -269,14 +269,14 @@ class GatherIntegrator final : public IndirectIntegrator {
  private:
   static EmptyRadiance empty(const GroupBounce& g) { return {g.sends[0], g.sends[1], g.sends[2]}; }
 
-  // The near hits' first-bounce source (solve.h NearSource) of point light value(p) for the
-  // points p listed (ascending, each once): the albedo where each lands times it.
-  template <typename Value>
-  NearSource near_source_of(const std::vector<uint32_t>& listed, const Value& value) const {
+  // The near hits' first-bounce source (solve.h NearSource) of `count` lit points, item(k) the
+  // k-th as (point p, its light), p ascending, each once: the albedo where each lands times it.
+  template <typename Item>
+  NearSource near_source_of(size_t count, const Item& item) const {
     NearSource out;
-    out.reserve(listed.size());
-    for (uint32_t p : listed) {
-      const glm::vec3 v = value(p);
+    out.reserve(count);
+    for (size_t k = 0; k < count; ++k) {
+      const auto [p, v] = item(k);
       if (v == glm::vec3(0.0f)) continue;
       const uint32_t i = points_.index[p];
       out.push_back({i, b_.texels.albedo[op_.near[i].fine] * v});
@@ -286,23 +286,14 @@ class GatherIntegrator final : public IndirectIntegrator {
   // From a point image (3 channels, or 1 for grey).
   NearSource near_source(const PointLight& d) const {
     const size_t ch = size_t(d.channels);
-    std::vector<uint32_t> all(points_.size());
-    std::iota(all.begin(), all.end(), 0u);
-    return near_source_of(all, [&](size_t p) {
+    return near_source_of(points_.size(), [&](size_t p) {
       const float* v = d.data.data() + p * ch;
-      return ch == 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]);
+      return std::pair(uint32_t(p), ch == 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]));
     });
   }
   // From the lit points alone: the same list as near_source(PointLight) of the image they fill.
   NearSource near_source(const SparsePointLight& lit) const {
-    std::vector<uint32_t> listed(lit.size());
-    for (size_t i = 0; i < lit.size(); ++i) listed[i] = lit[i].first;
-    return near_source_of(listed, [&](size_t p) {
-      const auto it = std::lower_bound(
-          lit.begin(), lit.end(), p,
-          [](const std::pair<uint32_t, glm::vec3>& x, size_t q) { return x.first < q; });
-      return it->second;  // p is listed: it is in `lit`
-    });
+    return near_source_of(lit.size(), [&](size_t k) { return lit[k]; });
   }
   // From a sum of the passes' point maps: only the points its sparse maps wrote (an object's
   // shadow covers few), every point of its dense ones.
@@ -323,7 +314,8 @@ class GatherIntegrator final : public IndirectIntegrator {
       std::sort(listed.begin(), listed.end());
       listed.erase(std::unique(listed.begin(), listed.end()), listed.end());
     }
-    return near_source_of(listed, [&](size_t p) { return sum.at(p); });
+    return near_source_of(listed.size(),
+                          [&](size_t k) { return std::pair(listed[k], sum.at(listed[k])); });
   }
 
   SolveOptions options(float threshold, int threads) const {

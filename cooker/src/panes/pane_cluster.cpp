@@ -68,6 +68,13 @@ bool split(Cluster& c, Cluster& other, const TexelSet& texels) {
   return true;
 }
 
+// Splits cluster i, its second half appended.
+void split_off(std::vector<Cluster>& clusters, size_t i, const TexelSet& texels) {
+  Cluster other;
+  split(clusters[i], other, texels);
+  clusters.push_back(std::move(other));
+}
+
 // Splits the widest cluster that can be split, its second half appended; false when there is
 // none.
 bool split_widest(std::vector<Cluster>& clusters, const TexelSet& texels) {
@@ -77,9 +84,7 @@ bool split_widest(std::vector<Cluster>& clusters, const TexelSet& texels) {
     if (best < 0 || clusters[i].extent() > clusters[size_t(best)].extent()) best = int(i);
   }
   if (best < 0) return false;
-  Cluster other;
-  split(clusters[size_t(best)], other, texels);
-  clusters.push_back(std::move(other));
+  split_off(clusters, size_t(best), texels);
   return true;
 }
 
@@ -340,9 +345,7 @@ std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, c
       }
     }
     if (i < 0) break;
-    Cluster other;
-    split(clusters[size_t(i)], other, texels);
-    clusters.push_back(std::move(other));
+    split_off(clusters, size_t(i), texels);
     records.resize(clusters.size());
     describe_one(size_t(i));
     describe_one(clusters.size() - 1);
