@@ -133,9 +133,9 @@ std::vector<uint8_t> cook_pack(const PreparedScene& p, const BakeOptions& bake, 
                                Report& report, BakedMaps* maps_out) {
   // The cook's jobs in-process: the same code as `plan`, `cook-job` and `assemble`.
   const CookJobs jobs(p, bake, progress, report);
-  std::vector<GroupBake> results;
-  for (size_t i = 0; i < jobs.size(); ++i) results.push_back(jobs.run(i, progress, report));
-  return jobs.assemble(std::move(results), progress, report, maps_out);
+  std::vector<size_t> all(jobs.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  return jobs.assemble(jobs.run(all, progress, report), progress, report, maps_out);
 }
 
 FloatImage cook_state(const PreparedScene& p, const StateSpec& state, const BakeOptions& bake,

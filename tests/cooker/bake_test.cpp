@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "lightpatch/cooker/bake.h"
+#include "lightpatch/cooker/bake_plan.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/tracer.h"
 #include "test_scenes.h"
@@ -285,6 +287,89 @@ TEST(Bake, OutputStepIsThePercentileOverTwoFiftyFive) {
   const BakedMaps dark =
       bake_maps(scene, test::bare_layout(8, 8), texels, *tracer, options(), progress, report);
   EXPECT_GT(dark.output_step, 0.0f);
+}
+
+// BakeSession::bake_groups solves several groups' bounce light, their objects' changes and their
+// overlaps' joint changes together (`lightpatch cook`); a farm job bakes its one group with
+// bake_group. Both must give the same maps and decisions, bit for bit: one room, five lights
+// (two batches), a box on a table (an overlap), a stool outside a spot's cone (bounce only) and a
+// static lamp.
+TEST(Bake, GroupsBakedTogetherEqualEachBakedAlone) {
+  Scene scene;
+  test::add_closed_room(scene, {-3, 0, -3}, {3, 2.5f, 3}, 0.1f, "room");
+  test::add_object_box(scene, {-1.0f, 0.0f, -0.5f}, {0.6f, 0.7f, 0.5f}, "table");
+  test::add_object_box(scene, {-0.3f, 0.7f, -0.2f}, {0.1f, 1.0f, 0.2f}, "box");
+  test::add_object_box(scene, {2.0f, 0.0f, 2.0f}, {2.5f, 0.5f, 2.5f}, "stool");
+  Light soft = test::point_light("candle", {0.5f, 1.5f, 0.0f}, 2.0f, true);
+  soft.radius = 0.05f;
+  scene.lights = {
+      test::point_light("lamp_a", {-2, 2.2f, -2}, 6.0f, true),
+      test::point_light("lamp_b", {2, 2.2f, -2}, 6.0f, true),
+      soft,
+      test::spot_light("spot", {-2, 2.3f, 2}, {0.3f, -1, -0.3f}, 20.0f, 0.2f, 0.4f, true),
+      test::point_light("lamp_c", {0, 2.2f, 2}, 4.0f, true),
+      test::point_light("corner", {2.5f, 2.0f, 2.5f}, 3.0f, false)};
+  test::finish(scene);
+  const test::Prepared p = test::prepare(scene, 64);
+  BakeOptions o;
+  o.quality = Quality::kDraft;
+  Progress progress(true);
+  Report report;
+  BakeSession session(scene, p.layout, p.texels, *p.tracer, o, progress, report);
+  const size_t n = session.plan().groups.size();
+  ASSERT_EQ(n, 6u);
+  ASSERT_GT(n, BakeSession::kGroupBatch);  // two batches
+  std::vector<size_t> all(n);
+  for (size_t g = 0; g < n; ++g) all[g] = g;
+  const std::vector<GroupBake> together = session.bake_groups(all, progress, report);
+  ASSERT_EQ(together.size(), n);
+  auto same = [](const FloatImage& a, const FloatImage& b) {
+    return a.width == b.width && a.height == b.height && a.channels == b.channels &&
+           a.data.size() == b.data.size() &&
+           (a.data.empty() ||
+            std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
+  };
+  size_t shadows = 0, corrections = 0, bounce_only = 0;
+  for (size_t g = 0; g < n; ++g) {
+    const GroupBake alone = session.bake_group(g, progress, report);
+    const GroupBake& t = together[g];
+    EXPECT_EQ(t.group, g);
+    EXPECT_TRUE(same(alone.map, t.map)) << g;
+    EXPECT_TRUE(same(alone.indirect, t.indirect)) << g;
+    EXPECT_TRUE(same(alone.direct, t.direct)) << g;
+    ASSERT_EQ(alone.shadows.size(), t.shadows.size()) << g;
+    for (size_t k = 0; k < t.shadows.size(); ++k) {
+      EXPECT_EQ(alone.shadows[k].object, t.shadows[k].object) << g;
+      EXPECT_TRUE(same(alone.shadows[k].map, t.shadows[k].map)) << g << " " << k;
+      EXPECT_TRUE(same(alone.shadows[k].indirect, t.shadows[k].indirect)) << g << " " << k;
+    }
+    ASSERT_EQ(alone.pair_corrections.size(), t.pair_corrections.size()) << g;
+    for (size_t k = 0; k < t.pair_corrections.size(); ++k) {
+      EXPECT_TRUE(same(alone.pair_corrections[k].map, t.pair_corrections[k].map)) << g;
+      EXPECT_TRUE(same(alone.pair_corrections[k].indirect, t.pair_corrections[k].indirect)) << g;
+    }
+    ASSERT_EQ(alone.static_shadows.size(), t.static_shadows.size()) << g;
+    for (size_t k = 0; k < t.static_shadows.size(); ++k)
+      EXPECT_TRUE(same(alone.static_shadows[k].map, t.static_shadows[k].map)) << g;
+    ASSERT_EQ(alone.decisions.size(), t.decisions.size()) << g;
+    for (size_t k = 0; k < t.decisions.size(); ++k) {
+      const Decision &a = alone.decisions[k], &b = t.decisions[k];
+      EXPECT_EQ(int(a.kind), int(b.kind)) << g << " " << k;
+      EXPECT_EQ(a.object, b.object) << g << " " << k;
+      EXPECT_EQ(a.object_b, b.object_b) << g << " " << k;
+      EXPECT_EQ(a.taken, b.taken) << g << " " << k;
+      EXPECT_EQ(a.reason, b.reason) << g << " " << k;
+      if (a.kind == DecisionKind::kObjectBounce && a.stage == DecisionStage::kBounce && a.taken)
+        ++bounce_only;
+    }
+    shadows += t.shadows.size();
+    corrections += t.pair_corrections.size();
+  }
+  // The scene exercises what is solved together: shadows with bounce light, overlaps, an object
+  // that changes only bounce light.
+  EXPECT_GT(shadows, 8u);
+  EXPECT_GT(corrections, 0u);
+  EXPECT_GT(bounce_only, 0u);
 }
 
 }  // namespace

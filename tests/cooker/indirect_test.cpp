@@ -400,7 +400,8 @@ auto two_ways(const SolveOptions& so, Solve&& solve) {
 
 // solve_changes (solve.h) runs several changes side by side, each bounce's gathers sharing one
 // pass over the stored rays: each job must get the bits it gets alone, whatever its batch (more
-// jobs than kChangeBatch, sparse and dense sources, one object, both, none), on any thread count.
+// jobs than kChangeBatch, sparse and dense sources, one object, both, none, changes of two
+// groups with their own tolerances), on any thread count.
 TEST(Indirect, BatchedChangesEqualEachChangeSolvedAlone) {
   const BoxRoomGather box;
   const GatherOperator& op = box.op;
@@ -413,13 +414,18 @@ TEST(Indirect, BatchedChangesEqualEachChangeSolvedAlone) {
   so.max_bounces = 12;
   so.threads = 2;
   so.reach = &reach;
-  const Bounces empty = solve_indirect(op, {}, light, so);
-  const EmptyRadiance e = empty_radiance(op, light, empty);
+  CoarseMap other(nc, glm::vec3(0.0f));  // a second group: a light on a third of the tiles
+  for (size_t c = 0; c < nc; ++c)
+    if (op.tile_of[c] % 3 == 0) other[c] = glm::vec3(0.1f, 0.4f, 0.9f);
+  const EmptyRadiance e = empty_radiance(op, light, solve_indirect(op, {}, light, so));
+  const EmptyRadiance e2 = empty_radiance(op, other, solve_indirect(op, {}, other, so));
   const std::vector<std::vector<uint8_t>> presents = {{1, 0}, {0, 1}, {1, 1}, {0, 0}};
   std::vector<ChangeJob> jobs;
   for (size_t j = 0; j < kChangeBatch + 3; ++j) {
     ChangeJob job;
     job.present = &presents[j % presents.size()];
+    job.empty = j % 3 == 1 ? &e2 : &e;
+    job.tolerance = j % 2 == 1 ? 3e-5f : 1e-5f;
     job.direct_change.assign(nc, glm::vec3(0.0f));
     // A source on a few tiles (an object's shadow), a different one each job; every fifth dense.
     for (size_t c = 0; c < nc; ++c)
@@ -429,15 +435,17 @@ TEST(Indirect, BatchedChangesEqualEachChangeSolvedAlone) {
   }
   std::vector<SolveStats> stats;
   const auto [together, single_thread] = two_ways(so, [&](const SolveOptions& o, bool first) {
-    return solve_changes(op, e, jobs, o, first ? &stats : nullptr);
+    return solve_changes(op, jobs, o, first ? &stats : nullptr);
   });
   ASSERT_EQ(together.size(), jobs.size());
   ASSERT_EQ(stats.size(), jobs.size());
   bool some_differ = false;
   for (size_t j = 0; j < jobs.size(); ++j) {
     SolveStats alone_stats;
-    const CoarseMap alone =
-        solve_change(op, *jobs[j].present, e, jobs[j].direct_change, so, &alone_stats);
+    SolveOptions own = so;
+    own.tolerance = jobs[j].tolerance;
+    const CoarseMap alone = solve_change(op, *jobs[j].present, *jobs[j].empty,
+                                         jobs[j].direct_change, own, &alone_stats);
     ASSERT_EQ(alone.size(), nc);
     EXPECT_EQ(std::memcmp(alone.data(), together[j].data(), nc * sizeof(alone[0])), 0) << j;
     EXPECT_EQ(std::memcmp(alone.data(), single_thread[j].data(), nc * sizeof(alone[0])), 0) << j;
@@ -481,9 +489,12 @@ TEST(Indirect, SourcesSolvedSideBySideEqualEachSolvedAlone) {
     for (uint32_t i = 0; i < op.near.size(); i += 3) near[j].push_back({i, glm::vec3(0.3f)});
     near_of[j] = &near[j];
   }
+  // Each source its own tolerance (light groups of different significance).
+  std::vector<float> tolerance(sources.size());
+  for (size_t j = 0; j < sources.size(); ++j) tolerance[j] = j % 3 == 2 ? 4e-5f : 1e-5f;
   std::vector<SolveStats> stats;
   const auto [together, single_thread] = two_ways(so, [&](const SolveOptions& o, bool first) {
-    return solve_indirect_many(op, sources, near_of, o, first ? &stats : nullptr);
+    return solve_indirect_many(op, sources, near_of, o, first ? &stats : nullptr, tolerance);
   });
   ASSERT_EQ(together.size(), sources.size());
   ASSERT_EQ(single_thread.size(), sources.size());
@@ -495,7 +506,9 @@ TEST(Indirect, SourcesSolvedSideBySideEqualEachSolvedAlone) {
   bool some_differ = false;
   for (size_t j = 0; j < sources.size(); ++j) {
     SolveStats alone_stats;
-    const Bounces alone = solve_indirect(op, {}, sources[j], so, &alone_stats, near_of[j]);
+    SolveOptions own = so;
+    own.tolerance = tolerance[j];
+    const Bounces alone = solve_indirect(op, {}, sources[j], own, &alone_stats, near_of[j]);
     for (const Bounces* b : {&together[j], &single_thread[j]}) {
       EXPECT_TRUE(same(alone.first, b->first)) << j;
       EXPECT_TRUE(same(alone.second, b->second)) << j;

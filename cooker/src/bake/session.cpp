@@ -135,7 +135,24 @@ GroupBake BakeSession::bake_group(size_t group, Progress& progress, Report& repo
   if (group >= impl_->plan.groups.size())
     throw CookError("bake: no light group " + std::to_string(group));
   impl_->trace_shared(progress, report);
-  return bake_light_group(impl_->ctx, impl_->plan, group, progress, report);
+  return std::move(bake_light_groups(impl_->ctx, impl_->plan, {group}, progress, report).front());
+}
+
+std::vector<GroupBake> BakeSession::bake_groups(const std::vector<size_t>& groups,
+                                                Progress& progress, Report& report) const {
+  for (size_t g : groups)
+    if (g >= impl_->plan.groups.size())
+      throw CookError("bake: no light group " + std::to_string(g));
+  impl_->trace_shared(progress, report);
+  std::vector<GroupBake> out;
+  for (size_t first = 0; first < groups.size(); first += kGroupBatch) {
+    const std::vector<size_t> batch(
+        groups.begin() + std::ptrdiff_t(first),
+        groups.begin() + std::ptrdiff_t(std::min(groups.size(), first + kGroupBatch)));
+    for (GroupBake& g : bake_light_groups(impl_->ctx, impl_->plan, batch, progress, report))
+      out.push_back(std::move(g));
+  }
+  return out;
 }
 
 BakedMaps BakeSession::assemble(std::vector<GroupBake> groups, Report& report) const {
@@ -200,10 +217,9 @@ BakedMaps bake_maps(const Scene& scene, const Layout& layout, const TexelSet& te
                     const Tracer& tracer, const BakeOptions& options, Progress& progress,
                     Report& report) {
   BakeSession session(scene, layout, texels, tracer, options, progress, report);
-  std::vector<GroupBake> groups;
-  for (size_t g = 0; g < session.plan().groups.size(); ++g)
-    groups.push_back(session.bake_group(g, progress, report));
-  BakedMaps maps = session.assemble(std::move(groups), report);
+  std::vector<size_t> all(session.plan().groups.size());
+  for (size_t g = 0; g < all.size(); ++g) all[g] = g;
+  BakedMaps maps = session.assemble(session.bake_groups(all, progress, report), report);
   session.bake_panes(maps, progress, report);
   return maps;
 }

@@ -137,6 +137,11 @@ GroupBake CookJobs::run(size_t i, Progress& progress, Report& report) const {
   return session_->bake_group(i, progress, report);
 }
 
+std::vector<GroupBake> CookJobs::run(const std::vector<size_t>& jobs, Progress& progress,
+                                     Report& report) const {
+  return session_->bake_groups(jobs, progress, report);
+}
+
 std::vector<uint8_t> CookJobs::assemble(std::vector<GroupBake> results, Progress& progress,
                                         Report& report, BakedMaps* maps_out) const {
   BakedMaps maps = session_->assemble(std::move(results), report);

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <numeric>
 
@@ -105,21 +106,40 @@ class GatherIntegrator final : public IndirectIntegrator {
 
   const DirectPoints* direct_points() const override { return &points_; }
 
-  GroupBounce prepare(const FloatImage& direct, const PointLight* points,
-                      float threshold) const override {
-    GroupBounce g;
-    const CoarseMap source = coarse_source(op_, b_.texels, direct);
-    const NearSource near = points ? near_source(*points) : NearSource{};
-    SolveStats st;
-    const Bounces bounces = solve_indirect(op_, {}, source, options(threshold, b_.threads), &st,
-                                           points ? &near : nullptr);
-    count(st, groups_);
-    g.indirect = bounces.total();
-    EmptyRadiance e = empty_radiance(op_, source, bounces);
-    g.sends = {std::move(e.direct), std::move(e.first), std::move(e.later)};
-    g.peak = peak(g.indirect);
-    g.bounces = st.bounces;
-    return g;
+  std::vector<GroupBounce> prepare(const std::vector<GroupLight>& groups,
+                                   int threads) const override {
+    const size_t n = groups.size();
+    std::vector<CoarseMap> sources(n);
+    std::vector<NearSource> near(n);
+    std::vector<const NearSource*> near_of(n, nullptr);
+    std::vector<float> tolerance(n);
+    parallel_for(int(n), threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      const GroupLight& g = groups[j];
+      sources[j] = coarse_source(op_, b_.texels, *g.direct);
+      tolerance[j] = options(g.threshold, threads).tolerance;
+      if (g.points) {
+        near[j] = near_source(*g.points);
+        near_of[j] = &near[j];
+      }
+    });
+    std::vector<SolveStats> st;
+    std::vector<Bounces> bounces =
+        solve_indirect_many(op_, sources, near_of, options(0.0f, threads), &st, tolerance);
+    std::vector<GroupBounce> out(n);
+    parallel_for(int(n), threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      GroupBounce& g = out[j];
+      g.indirect = bounces[j].total();
+      EmptyRadiance e = empty_radiance(op_, sources[j], bounces[j]);
+      bounces[j] = Bounces{};
+      g.sends = {std::move(e.direct), std::move(e.first), std::move(e.later)};
+      g.peak = peak(g.indirect);
+      g.bounces = st[j].bounces;
+      g.gathers = st[j].gathers;
+    });
+    for (size_t j = 0; j < n; ++j) count(st[j], groups_);
+    return out;
   }
 
   std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
@@ -151,18 +171,21 @@ class GatherIntegrator final : public IndirectIntegrator {
     return out;
   }
 
-  std::vector<BounceMap> changes(const GroupBounce& group,
-                                 const std::vector<ChangeRequest>& requests, float threshold,
-                                 int threads, std::vector<double>* seconds,
-                                 Progress* progress) const override {
+  std::vector<BounceMap> changes(const std::vector<ChangeRequest>& requests, int threads,
+                                 std::vector<double>* seconds, Progress* progress) const override {
     const auto t0 = std::chrono::steady_clock::now();
     const size_t n = requests.size();
+    // Each group's sends as the solve reads them, once per group.
+    std::map<const GroupBounce*, EmptyRadiance> empties;
+    for (const ChangeRequest& r : requests) empties.try_emplace(r.group, empty(*r.group));
     std::vector<ChangeJob> jobs(n);
     std::vector<NearSource> near(n);
     parallel_for(int(n), threads, [&](int jj) {
       const size_t j = size_t(jj);
       const ChangeRequest& r = requests[j];
       jobs[j].present = &r.present;
+      jobs[j].empty = &empties.at(r.group);
+      jobs[j].tolerance = options(r.threshold, threads).tolerance;
       jobs[j].direct_change =
           r.blocked.sparse.empty() && r.blocked.dense.empty()
               ? CoarseMap(op_.grid.size(), glm::vec3(0.0f))
@@ -174,7 +197,7 @@ class GatherIntegrator final : public IndirectIntegrator {
     });
     std::vector<SolveStats> st;
     std::vector<BounceMap> out =
-        solve_changes(op_, empty(group), jobs, options(threshold, threads), &st, [&](size_t k) {
+        solve_changes(op_, jobs, options(0.0f, threads), &st, [&](size_t k) {
           if (progress) progress->advance(k);
         });
     uint64_t total = 0;

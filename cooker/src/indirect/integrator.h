@@ -33,6 +33,7 @@ struct GroupBounce {
   std::vector<BounceMap> sends;
   float peak = 0.0f;  // largest irradiance of `indirect`
   int bounces = 0;
+  uint64_t gathers = 0;  // the work it took (final gathering: stored rays read)
 };
 
 // A linear combination of fine maps: the direct light a slot's objects block, or the joint
@@ -45,9 +46,11 @@ struct FineSum {
 
 // One change for IndirectIntegrator::changes().
 struct ChangeRequest {
-  std::vector<uint8_t> present;  // one byte per Scene object
-  FineSum blocked;               // the direct light they block (fine)
-  FineSum blocked_points;        // the same at direct_points() (empty without them)
+  const GroupBounce* group = nullptr;  // the prepared group it changes
+  float threshold = 0.0f;              // the group's significance, as for prepare()
+  std::vector<uint8_t> present;        // one byte per Scene object
+  FineSum blocked;                     // the direct light they block (fine)
+  FineSum blocked_points;              // the same at direct_points() (empty without them)
 };
 
 // Points where an integrator's bounce light reads the direct light itself instead of its cache
@@ -69,17 +72,24 @@ using PointLight = FloatImage;
 // at most once; the others 0.
 using SparsePointLight = std::vector<std::pair<uint32_t, glm::vec3>>;
 
+// One group's light for IndirectIntegrator::prepare().
+struct GroupLight {
+  const FloatImage* direct = nullptr;  // fine, 1 or 3 channels, the group's units
+  const PointLight* points = nullptr;  // the same at direct_points() (null when it has none)
+  float threshold = 0.0f;              // the group's significance (terms far below it are dropped)
+};
+
 class IndirectIntegrator {
  public:
   virtual ~IndirectIntegrator() = default;
   // The points whose direct light the group passes and states hand to prepare(), changes() and
   // add_state() (`points`), or null: none.
   virtual const DirectPoints* direct_points() const { return nullptr; }
-  // The bounce light of a group's direct light (fine, 1 or 3 channels, the group's units).
-  // `threshold`: the group's significance (terms far below it are dropped).
-  // `points`: the same light at direct_points() (null when it has none).
-  virtual GroupBounce prepare(const FloatImage& direct, const PointLight* points,
-                              float threshold) const = 0;
+  // The bounce light of each group's direct light, `threads` wide, each the same bits as
+  // prepared alone; groups whose receivers overlap share each bounce's pass over the
+  // integrator's rays (several lights of one room).
+  virtual std::vector<GroupBounce> prepare(const std::vector<GroupLight>& groups,
+                                           int threads) const = 0;
   // prepare() of several direct lights at once, `threads` wide, each the same bits as alone but
   // without `sends` (for light no object changes: the moving lights' panes); lights whose
   // receivers overlap share each bounce's pass over the integrator's rays. `points`: empty, or
@@ -88,15 +98,15 @@ class IndirectIntegrator {
   virtual std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
                                                 const std::vector<SparsePointLight>& points,
                                                 float threshold, int threads) const = 0;
-  // What the objects of each request change in a prepared group's bounce light,
+  // What the objects of each request change in its prepared group's bounce light,
   // I(no object) - I(present), given the direct light they block: for each request the map it
   // would get alone. Solved together, `threads` wide, so that several share each pass over the
-  // integrator's rays. `seconds` (may be null): each request's share of the solve's thread-seconds
+  // integrator's rays (best where requests of one object's changes to several groups are
+  // neighbours). `seconds` (may be null): each request's share of the solve's thread-seconds
   // (wall time x threads), by the work it took. `progress` (may be null) advances by each request
   // solved.
-  virtual std::vector<BounceMap> changes(const GroupBounce& group,
-                                         const std::vector<ChangeRequest>& requests,
-                                         float threshold, int threads, std::vector<double>* seconds,
+  virtual std::vector<BounceMap> changes(const std::vector<ChangeRequest>& requests, int threads,
+                                         std::vector<double>* seconds,
                                          Progress* progress) const = 0;
   // A cheap bound of the first bounce of a change for objects that block no direct light.
   virtual float first_change(const GroupBounce& group,

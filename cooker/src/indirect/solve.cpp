@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <map>
 
 #include "worker_pool.h"
 
@@ -347,7 +348,8 @@ glm::vec3 crossing_change(const GatherOperator& op, const PresentCrossings& pres
 // eight changes side by side, two batches at once, hold sixteen series.
 struct Series {
   const PresentCrossings* present = nullptr;
-  CoarseMap first;  // the first bounce
+  float tolerance = 0.0f;  // SolveOptions::tolerance for this series
+  CoarseMap first;         // the first bounce
   CoarseMap extra_second, extra_rest;
   SolveStats* stats = nullptr;
   Bounces out;  // its terms: the first, the second and the rest summed
@@ -381,7 +383,7 @@ void run_series(const GatherOperator& op, std::vector<Series>& series,
       const size_t j = size_t(jj);
       gathers[j] = 0;
       if (!running[j]) return;
-      const bool any = prune(delta[j], options.tolerance);
+      const bool any = prune(delta[j], series[j].tolerance);
       if (!any && !extra_of(series[j])) {
         running[j] = 0;
         CoarseMap().swap(delta[j]);
@@ -530,6 +532,7 @@ Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& pre
   std::vector<Series> series(1);
   Series& s = series[0];
   s.present = &crossings;
+  s.tolerance = options.tolerance;
   s.stats = stats;
   s.first.assign(source.size(), glm::vec3(0.0f));
   gather_many(op, {{&source, &crossings, &receivers, &s.first}}, options.threads, 0);
@@ -543,7 +546,8 @@ std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
                                          const std::vector<CoarseMap>& sources,
                                          const std::vector<const NearSource*>& near,
                                          const SolveOptions& options,
-                                         std::vector<SolveStats>* stats) {
+                                         std::vector<SolveStats>* stats,
+                                         const std::vector<float>& tolerance) {
   const size_t n = sources.size();
   if (stats) stats->assign(n, SolveStats{});
   const PresentCrossings none;  // no object present: no ray changes
@@ -554,6 +558,7 @@ std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
     const size_t j = size_t(jj);
     receivers[j] = receivers_of(op, sources[j], options.reach, 0);
     series[j].present = &none;
+    series[j].tolerance = tolerance.empty() ? options.tolerance : tolerance[j];
     series[j].stats = stats ? &(*stats)[j] : nullptr;
     series[j].first.assign(sources[j].size(), glm::vec3(0.0f));
     jobs[j] = {&sources[j], &none, &receivers[j], &series[j].first};
@@ -583,20 +588,29 @@ EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
   return e;
 }
 
-std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadiance& empty,
-                                     const std::vector<ChangeJob>& jobs,
+std::vector<CoarseMap> solve_changes(const GatherOperator& op, const std::vector<ChangeJob>& jobs,
                                      const SolveOptions& options, std::vector<SolveStats>* stats,
                                      const std::function<void(size_t)>& done) {
   const size_t nc = op.grid.size(), n = jobs.size();
   if (stats) stats->assign(n, SolveStats{});
   // Each term of I(present) reads through its rays what the previous term sends on; where a ray
   // now ends on an object, what the static hit sent in the empty series (the same term) is
-  // replaced by what the object sends: the crossing terms, one per level.
-  std::vector<PresentCrossings> crossings(n);
+  // replaced by what the object sends: the crossing terms, one per level. Built once for each
+  // set of present objects.
+  std::map<std::vector<uint8_t>, size_t> set_of;
+  std::vector<size_t> uses(n);
+  std::vector<const std::vector<uint8_t>*> sets;
+  for (size_t j = 0; j < n; ++j) {
+    const auto [it, fresh] = set_of.try_emplace(*jobs[j].present, sets.size());
+    if (fresh) sets.push_back(jobs[j].present);
+    uses[j] = it->second;
+  }
+  std::vector<PresentCrossings> crossings(sets.size());
+  parallel_for(int(sets.size()), options.threads,
+               [&](int i) { crossings[size_t(i)] = present_crossings(op, *sets[size_t(i)]); });
   std::vector<std::vector<uint32_t>> receivers(n);
   parallel_for(int(n), options.threads, [&](int jj) {
     const size_t j = size_t(jj);
-    crossings[j] = present_crossings(op, *jobs[j].present);
     // The blocked direct light reaches only the receivers whose rays can see it (rays that now
     // end on an object included: their tiles are among each tile's sources).
     receivers[j] = receivers_of(op, jobs[j].direct_change, options.reach, 0);
@@ -633,22 +647,25 @@ std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadian
     for (size_t i = 0; i < k; ++i) {
       const size_t j = batch[i];
       series[i].first.assign(nc, glm::vec3(0.0f));
-      gather[i] = {&jobs[j].direct_change, &crossings[j], &receivers[j], &series[i].first};
+      gather[i] = {&jobs[j].direct_change, &crossings[uses[j]], &receivers[j], &series[i].first};
     }
     gather_many(op, gather, inner.threads, 0);
     for (size_t i = 0; i < k; ++i) {
       const size_t j = batch[i];
       Series& s = series[i];
+      const PresentCrossings& cross = crossings[uses[j]];
+      const EmptyRadiance& empty = *jobs[j].empty;
       if (jobs[j].near_change)
         add_near(op, *options.near, jobs[j].direct_change, *jobs[j].near_change, s.first);
       s.extra_second.assign(nc, glm::vec3(0.0f));
       s.extra_rest.assign(nc, glm::vec3(0.0f));
-      for (uint32_t c : crossings[j].receivers) {
-        s.first[c] += crossing_change(op, crossings[j], empty.direct, 0, c);
-        s.extra_second[c] += crossing_change(op, crossings[j], empty.first, 1, c);
-        s.extra_rest[c] += crossing_change(op, crossings[j], empty.later, 2, c);
+      for (uint32_t c : cross.receivers) {
+        s.first[c] += crossing_change(op, cross, empty.direct, 0, c);
+        s.extra_second[c] += crossing_change(op, cross, empty.first, 1, c);
+        s.extra_rest[c] += crossing_change(op, cross, empty.later, 2, c);
       }
-      s.present = &crossings[j];
+      s.present = &cross;
+      s.tolerance = jobs[j].tolerance;
       if (stats) {
         s.stats = &(*stats)[j];
         s.stats->gathers += uint64_t(receivers[j].size()) * uint64_t(op.rays);
@@ -669,8 +686,8 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
                        const SolveOptions& options, SolveStats* stats,
                        const NearSource* near_change) {
   std::vector<SolveStats> st;
-  CoarseMap out = std::move(
-      solve_changes(op, empty, {{&present, direct_change, near_change}}, options, &st)[0]);
+  CoarseMap out = std::move(solve_changes(
+      op, {{&present, direct_change, near_change, &empty, options.tolerance}}, options, &st)[0]);
   if (stats) {
     stats->bounces = st[0].bounces;
     stats->gathers += st[0].gathers;

@@ -98,12 +98,15 @@ Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& pre
 // solve_indirect() of several sources with no object present, the same bits as each solved
 // alone, `options.threads` wide: sources whose receivers overlap enough share each bounce's pass
 // over the stored rays (gather_many), up to kChangeBatch. `near` (empty, or one per source, each
-// may be null) as solve_indirect's. `stats` (may be null) receives one entry per source.
+// may be null) as solve_indirect's. `tolerance` (empty: options.tolerance for every source) one
+// per source, each as options.tolerance would be alone. `stats` (may be null) receives one entry
+// per source.
 std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
                                          const std::vector<CoarseMap>& sources,
                                          const std::vector<const NearSource*>& near,
                                          const SolveOptions& options,
-                                         std::vector<SolveStats>* stats = nullptr);
+                                         std::vector<SolveStats>* stats = nullptr,
+                                         const std::vector<float>& tolerance = {});
 
 // What a group sends on with no object present, by the series term that reads it: its direct
 // light's radiance source (read by the first bounce), albedo * its first bounce (read by the
@@ -127,20 +130,25 @@ CoarseMap solve_change(const GatherOperator& op, const std::vector<uint8_t>& pre
 // The most changes solve_changes() solves side by side.
 constexpr size_t kChangeBatch = 8;
 
-// One change for solve_changes(): solve_change()'s arguments.
+// One change for solve_changes(): solve_change()'s arguments, with the group it changes (`empty`,
+// which must outlive the solve) and its series' tolerance (SolveOptions::tolerance).
 struct ChangeJob {
   const std::vector<uint8_t>* present = nullptr;
   CoarseMap direct_change;
   const NearSource* near_change = nullptr;
+  const EmptyRadiance* empty = nullptr;
+  float tolerance = 0.0f;
 };
 
-// solve_change() of every job, the same bits as each solved alone, `options.threads` wide. Jobs
-// whose receivers overlap enough are solved side by side, up to kChangeBatch, each bounce's
+// solve_change() of every job, the same bits as each solved alone, `options.threads` wide
+// (`options.tolerance` is not read: each job has its own). Jobs may change different groups.
+// Jobs whose receivers overlap enough are solved side by side, up to kChangeBatch, each bounce's
 // gathers sharing one pass over the stored rays (a pass per job read them once for each); such
-// batches run in parallel. `stats` (may be null) receives one entry per job; `done` (may be
-// empty) is called with the number of jobs each batch finished, from the thread that solved it.
-std::vector<CoarseMap> solve_changes(const GatherOperator& op, const EmptyRadiance& empty,
-                                     const std::vector<ChangeJob>& jobs,
+// batches run in parallel. Jobs with the same objects present (one object's change to several
+// lights) share the rays those objects change. `stats` (may be null) receives one entry per job;
+// `done` (may be empty) is called with the number of jobs each batch finished, from the thread
+// that solved it.
+std::vector<CoarseMap> solve_changes(const GatherOperator& op, const std::vector<ChangeJob>& jobs,
                                      const SolveOptions& options,
                                      std::vector<SolveStats>* stats = nullptr,
                                      const std::function<void(size_t)>& done = {});

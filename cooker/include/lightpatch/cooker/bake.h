@@ -149,6 +149,13 @@ class BakeSession {
   float output_step() const;
   // Bakes group `group` of plan().groups. Its maps depend on the scene, options and seed only.
   GroupBake bake_group(size_t group, Progress& progress, Report& report) const;
+  // bake_group() of each of `groups` (any order, each at most once), the same maps and decisions
+  // as each baked alone, in that order. Up to kGroupBatch at a time have their bounce light and
+  // their objects' changes to it solved together: lights of one room then share each pass over
+  // the gather rays, for the memory of that many groups' direct light at once.
+  std::vector<GroupBake> bake_groups(const std::vector<size_t>& groups, Progress& progress,
+                                     Report& report) const;
+  static constexpr size_t kGroupBatch = 4;
   // The groups' maps as one BakedMaps, in plan order (every group exactly once).
   BakedMaps assemble(std::vector<GroupBake> groups, Report& report) const;
   // The moving lights and their panes into `maps` (BakedMaps::moving_lights, ::panes): clusters

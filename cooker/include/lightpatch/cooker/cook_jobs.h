@@ -86,6 +86,10 @@ class CookJobs {
   size_t max_maps(size_t i) const;
 
   GroupBake run(size_t i, Progress& progress, Report& report) const;
+  // run() of each of `jobs` (indices, each at most once), in that order, the same results as
+  // each run alone, solved side by side (BakeSession::bake_groups): an in-process cook.
+  std::vector<GroupBake> run(const std::vector<size_t>& jobs, Progress& progress,
+                             Report& report) const;
   // Every job's result (any order, each once) finalized and packed: the pack's bytes.
   // `maps_out`, if not null, receives the finalized maps.
   std::vector<uint8_t> assemble(std::vector<GroupBake> results, Progress& progress, Report& report,
