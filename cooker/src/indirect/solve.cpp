@@ -60,20 +60,32 @@ std::vector<uint32_t> receivers_of(const GatherOperator& op, const CoarseMap& sr
   std::vector<uint8_t> active(n_tiles, 0);
   for (uint32_t c = 0; c < src.size(); ++c)
     if (src[c] != glm::vec3(0.0f)) active[op.tile_of[c]] = 1;
+  // The tiles with a ray into an active tile: from the active tiles where they hold few of the
+  // (tile, source) pairs (a source on a few tiles), else by each tile's sources.
+  std::vector<uint8_t> lit(n_tiles, 0);
+  size_t from_active = 0;
+  if (reach)
+    for (size_t t = 0; t < n_tiles; ++t)
+      if (active[t]) from_active += reach->target_offset[t + 1] - reach->target_offset[t];
+  if (reach && 2 * from_active < reach->targets.size()) {
+    for (size_t a = 0; a < n_tiles; ++a)
+      if (active[a])
+        for (uint32_t i = reach->target_offset[a]; i < reach->target_offset[a + 1]; ++i)
+          lit[reach->targets[i]] = 1;
+  } else {
+    for (size_t t = 0; t < n_tiles; ++t)
+      for (uint32_t s : op.sources[t])
+        if (active[s]) {
+          lit[t] = 1;
+          break;
+        }
+  }
   std::vector<uint8_t> take(src.size(), 0);
   size_t taken = 0;
   for (size_t t = 0; t < n_tiles; ++t) {
-    bool any = false;
-    for (uint32_t s : op.sources[t]) {
-      if (active[s]) {
-        any = true;
-        break;
-      }
-    }
-    if (any) {
-      for (uint32_t c : op.tile_coarse[t]) take[c] = 1;
-      taken += op.tile_coarse[t].size();
-    }
+    if (!lit[t]) continue;
+    for (uint32_t c : op.tile_coarse[t]) take[c] = 1;
+    taken += op.tile_coarse[t].size();
   }
   if (reach) {
     constexpr size_t kLevels = GatherOperator::kLevels;
@@ -486,6 +498,14 @@ GatherReach gather_reach(const GatherOperator& op, int threads) {
     uint32_t* next = at.data() + size_t(item) * n_keys;
     walk(size_t(item), [&](uint32_t c, uint32_t key) { r.receivers[next[key]++] = c; });
   });
+  r.target_offset.assign(n_tiles + 1, 0);
+  for (const std::vector<uint32_t>& from : op.sources)
+    for (uint32_t s : from) ++r.target_offset[s + 1];
+  for (size_t t = 0; t < n_tiles; ++t) r.target_offset[t + 1] += r.target_offset[t];
+  r.targets.resize(r.target_offset[n_tiles]);
+  std::vector<uint32_t> fill(r.target_offset.begin(), r.target_offset.end() - 1);
+  for (size_t t = 0; t < n_tiles; ++t)
+    for (uint32_t s : op.sources[t]) r.targets[fill[s]++] = uint32_t(t);
   return r;
 }
 

@@ -28,6 +28,11 @@ using CoarseMap = std::vector<glm::vec3>;
 struct GatherReach {
   std::vector<uint32_t> offset;     // [tile * kLevels + class] -> into `receivers`
   std::vector<uint32_t> receivers;  // ascending within each (tile, class)
+  // GatherOperator::sources inverted: per tile, the tiles whose rays reach it, so that a source
+  // on a few tiles (a pane, a shadow) finds the tiles it lights without scanning every tile's
+  // sources.
+  std::vector<uint32_t> target_offset;  // [tile] -> into `targets`
+  std::vector<uint32_t> targets;
 };
 GatherReach gather_reach(const GatherOperator& op, int threads);
 
