@@ -544,22 +544,55 @@ CoarseMap Bounces::total() const {
   return out;
 }
 
+namespace {
+
+// One source of solve_sources: what it reads at the near hits (may be null), where its
+// statistics go (may be null) and its series' tolerance.
+struct SourceJob {
+  const CoarseMap* source;
+  const NearSource* near;
+  SolveStats* stats;
+  float tolerance;
+};
+
+// The series of each source with the objects of `crossings` in place, side by side: the first
+// bounce's gathers in one gather_many, then run_series.
+std::vector<Bounces> solve_sources(const GatherOperator& op, const PresentCrossings& crossings,
+                                   const std::vector<SourceJob>& jobs,
+                                   const SolveOptions& options) {
+  const size_t n = jobs.size();
+  std::vector<std::vector<uint32_t>> receivers(n);
+  std::vector<Series> series(n);
+  std::vector<GatherJob> gathers(n);
+  parallel_for(int(n), std::min(options.threads, int(n)), [&](int jj) {
+    const size_t j = size_t(jj);
+    const CoarseMap& source = *jobs[j].source;
+    receivers[j] = receivers_of(op, source, options.reach, 0);
+    series[j].present = &crossings;
+    series[j].tolerance = jobs[j].tolerance;
+    series[j].stats = jobs[j].stats;
+    series[j].first.assign(source.size(), glm::vec3(0.0f));
+    gathers[j] = {&source, &crossings, &receivers[j], &series[j].first};
+  });
+  gather_many(op, gathers, options.threads, 0);
+  for (size_t j = 0; j < n; ++j) {
+    if (jobs[j].near) add_near(op, *options.near, *jobs[j].source, *jobs[j].near, series[j].first);
+    if (jobs[j].stats) jobs[j].stats->gathers += uint64_t(receivers[j].size()) * uint64_t(op.rays);
+  }
+  run_series(op, series, options);
+  std::vector<Bounces> out(n);
+  for (size_t j = 0; j < n; ++j) out[j] = std::move(series[j].out);
+  return out;
+}
+
+}  // namespace
+
 Bounces solve_indirect(const GatherOperator& op, const std::vector<uint8_t>& present,
                        const CoarseMap& source, const SolveOptions& options, SolveStats* stats,
                        const NearSource* near) {
   const PresentCrossings crossings = present_crossings(op, present);
-  const std::vector<uint32_t> receivers = receivers_of(op, source, options.reach, 0);
-  std::vector<Series> series(1);
-  Series& s = series[0];
-  s.present = &crossings;
-  s.tolerance = options.tolerance;
-  s.stats = stats;
-  s.first.assign(source.size(), glm::vec3(0.0f));
-  gather_many(op, {{&source, &crossings, &receivers, &s.first}}, options.threads, 0);
-  if (near) add_near(op, *options.near, source, *near, s.first);
-  if (stats) stats->gathers += uint64_t(receivers.size()) * uint64_t(op.rays);
-  run_series(op, series, options);
-  return std::move(s.out);
+  return std::move(
+      solve_sources(op, crossings, {{&source, near, stats, options.tolerance}}, options)[0]);
 }
 
 std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
@@ -570,29 +603,12 @@ std::vector<Bounces> solve_indirect_many(const GatherOperator& op,
                                          const std::vector<float>& tolerance) {
   const size_t n = sources.size();
   if (stats) stats->assign(n, SolveStats{});
+  std::vector<SourceJob> jobs(n);
+  for (size_t j = 0; j < n; ++j)
+    jobs[j] = {&sources[j], j < near.size() ? near[j] : nullptr, stats ? &(*stats)[j] : nullptr,
+               tolerance.empty() ? options.tolerance : tolerance[j]};
   const PresentCrossings none;  // no object present: no ray changes
-  std::vector<std::vector<uint32_t>> receivers(n);
-  std::vector<Series> series(n);
-  std::vector<GatherJob> jobs(n);
-  parallel_for(int(n), std::min(options.threads, int(n)), [&](int jj) {
-    const size_t j = size_t(jj);
-    receivers[j] = receivers_of(op, sources[j], options.reach, 0);
-    series[j].present = &none;
-    series[j].tolerance = tolerance.empty() ? options.tolerance : tolerance[j];
-    series[j].stats = stats ? &(*stats)[j] : nullptr;
-    series[j].first.assign(sources[j].size(), glm::vec3(0.0f));
-    jobs[j] = {&sources[j], &none, &receivers[j], &series[j].first};
-  });
-  gather_many(op, jobs, options.threads, 0);
-  for (size_t j = 0; j < n; ++j) {
-    if (j < near.size() && near[j])
-      add_near(op, *options.near, sources[j], *near[j], series[j].first);
-    if (stats) (*stats)[j].gathers += uint64_t(receivers[j].size()) * uint64_t(op.rays);
-  }
-  run_series(op, series, options);
-  std::vector<Bounces> out(n);
-  for (size_t j = 0; j < n; ++j) out[j] = std::move(series[j].out);
-  return out;
+  return solve_sources(op, none, jobs, options);
 }
 
 EmptyRadiance empty_radiance(const GatherOperator& op, const CoarseMap& source,
