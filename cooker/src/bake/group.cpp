@@ -87,7 +87,7 @@ struct GroupWork {
   std::vector<std::string> only_reason;
   std::vector<double> seconds;  // per slot, then per bounce-only object: its change's solve
   double own_s = 0.0;           // wall time of its own stages and its share of shared ones
-  // Overlaps kept, their slots (in dp.pairs order) and their joint change's request.
+  // Overlaps kept and their slots, in dp.pairs order.
   std::vector<PairCorrectionMap> corrections;
   std::vector<std::pair<int, int>> kept_pairs;
 };
@@ -100,6 +100,35 @@ std::vector<double> shares(double wall, const std::vector<double>& work) {
   for (size_t i = 0; i < work.size(); ++i)
     out[i] = total > 0.0 ? wall * work[i] / total : wall / double(work.size());
   return out;
+}
+
+// Whether each map's direct part (ShadowMap::direct) is kept apart from its bounce light: with
+// bounce light and no indirect map, where the pack may store the two apart.
+bool keeps_direct(const BakeContext& b) {
+  return b.indirect && b.layout.align == 1;
+}
+
+// Solves `requests` (request k changes group work[group_of[k]]) in one
+// IndirectIntegrator::changes() under a progress line naming the groups; `seconds` receives each
+// request's share of the solve and `by_group` each group's sum of them.
+std::vector<BounceMap> solve_requests(const BakeContext& b, const std::vector<GroupWork*>& work,
+                                      const std::vector<size_t>& group_of,
+                                      const std::vector<ChangeRequest>& requests,
+                                      const std::string& what, Progress& progress,
+                                      std::vector<double>& seconds, std::vector<double>& by_group) {
+  by_group.assign(work.size(), 0.0);
+  seconds.clear();
+  if (requests.empty()) return {};
+  std::vector<uint8_t> named(work.size(), 0);
+  for (size_t i : group_of) named[i] = 1;
+  std::string names;
+  for (size_t i = 0; i < work.size(); ++i)
+    if (named[i]) names += (names.empty() ? "" : ", ") + work[i]->lg.name;
+  progress.begin(what + ": " + names, requests.size());
+  std::vector<BounceMap> solved = b.indirect->changes(requests, b.threads, &seconds, &progress);
+  progress.end();
+  for (size_t k = 0; k < requests.size(); ++k) by_group[group_of[k]] += seconds[k];
+  return solved;
 }
 
 // The direct pass of one group.
@@ -182,7 +211,9 @@ void bounce_groups(const BakeContext& b, std::vector<GroupWork*>& work, Progress
   std::stable_sort(jobs.begin(), jobs.end(),
                    [](const Job& a, const Job& c) { return a.object < c.object; });
   std::vector<ChangeRequest> requests;
+  std::vector<size_t> group_of;
   for (const Job& job : jobs) {
+    group_of.push_back(job.work);
     GroupWork& g = *work[job.work];
     const DirectPass* points = g.dp.points.get();
     ChangeRequest r;
@@ -199,22 +230,11 @@ void bounce_groups(const BakeContext& b, std::vector<GroupWork*>& work, Progress
     requests.push_back(std::move(r));
   }
   const auto tc = std::chrono::steady_clock::now();
-  std::vector<double> solve_s;
-  std::vector<BounceMap> solved;
-  if (!requests.empty()) {
-    std::string names;
-    for (const GroupWork* g : work)
-      if (g->bounce) names += (names.empty() ? "" : ", ") + g->lg.name;
-    progress.begin("bounce of objects: " + names, requests.size());
-    solved = ind->changes(requests, b.threads, &solve_s, &progress);
-    progress.end();
-  }
-  {
-    std::vector<double> by_group(work.size(), 0.0);
-    for (size_t k = 0; k < jobs.size(); ++k) by_group[jobs[k].work] += solve_s[k];
-    const std::vector<double> change_s = shares(seconds_since(tc), by_group);
-    for (size_t i = 0; i < work.size(); ++i) bounce_s[i] += change_s[i];
-  }
+  std::vector<double> solve_s, by_group;
+  std::vector<BounceMap> solved =
+      solve_requests(b, work, group_of, requests, "bounce of objects", progress, solve_s, by_group);
+  const std::vector<double> change_s = shares(seconds_since(tc), by_group);
+  for (size_t i = 0; i < work.size(); ++i) bounce_s[i] += change_s[i];
   for (size_t k = 0; k < jobs.size(); ++k) {
     GroupWork& g = *work[jobs[k].work];
     const size_t slots = g.cand.sets.size();
@@ -237,7 +257,7 @@ void bounce_groups(const BakeContext& b, std::vector<GroupWork*>& work, Progress
         g.decide(DecisionKind::kObjectBounce, DecisionStage::kBounce, g.lg.bounce_only[q], -1,
                  !g.only[q].empty(), g.only_reason[q], std::nan(""), std::nan(""),
                  g.seconds[slots + q]);
-      if (ind && b.layout.align == 1) g.out.direct = g.direct_part(g.dp.map);
+      if (keeps_direct(b)) g.out.direct = g.direct_part(g.dp.map);
       ind->add(g.gb.indirect, g.dp.map, &g.out.indirect);
       bounce_s[i] += seconds_since(ta);
     }
@@ -254,7 +274,7 @@ void keep_maps(const BakeContext& b, GroupWork& g) {
   const TexelSet& texels = b.texels;
   const LightGroup& lg = g.lg;
   const bool planned = g.planned, is_static = g.is_static, bounce = g.bounce;
-  const bool keep_direct = ind && b.layout.align == 1;
+  const bool keep_direct = keeps_direct(b);
   const int w = texels.width, h = texels.height;
   // Without bounce light a light's transport is grey: one channel.
   const bool grey = !is_static && !bounce;
@@ -366,65 +386,54 @@ void bounce_overlaps(const BakeContext& b, std::vector<GroupWork*>& work, Progre
   const auto t0 = std::chrono::steady_clock::now();
   struct Job {
     size_t work, pair;
+    std::pair<int, int> objects;  // for the order
   };
   std::vector<Job> jobs;
-  std::vector<ChangeRequest> requests;
   for (size_t i = 0; i < work.size(); ++i) {
-    GroupWork& g = *work[i];
+    const GroupWork& g = *work[i];
     if (!g.bounce) continue;
-    for (size_t k = 0; k < g.corrections.size(); ++k) {
-      const PairCorrectionMap& pc = g.corrections[k];
-      const auto [sa, sb] = g.kept_pairs[k];
-      ChangeRequest r;
-      r.group = &g.gb;
-      r.threshold = g.lg.threshold;
-      r.present.assign(b.scene.objects.size(), 0);
-      r.present[size_t(pc.object_a)] = r.present[size_t(pc.object_b)] = 1;
-      r.blocked.sparse = {{&g.dp.shadow[size_t(sa)], 1.0f}, {&g.dp.shadow[size_t(sb)], 1.0f}};
-      r.blocked.dense = {{&pc.map, -1.0f}};
-      if (const DirectPass* points = g.dp.points.get()) {
-        r.blocked_points.sparse = {{&points->shadow[size_t(sa)], 1.0f},
-                                   {&points->shadow[size_t(sb)], 1.0f}};
-        auto it = points->pairs.find({sa, sb});
-        if (it != points->pairs.end()) r.blocked_points.dense = {{&it->second, -1.0f}};
-      }
-      jobs.push_back({i, k});
-      requests.push_back(std::move(r));
-    }
+    for (size_t k = 0; k < g.corrections.size(); ++k)
+      jobs.push_back({i, k, {g.corrections[k].object_a, g.corrections[k].object_b}});
   }
-  if (requests.empty()) return;
+  if (jobs.empty()) return;
   // One pair's joint changes to every group side by side, as bounce_groups' changes.
-  std::vector<size_t> order(jobs.size());
-  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-  auto pair_of = [&](size_t k) {
-    const PairCorrectionMap& pc = work[jobs[k].work]->corrections[jobs[k].pair];
-    return std::pair(pc.object_a, pc.object_b);
-  };
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t c) { return pair_of(a) < pair_of(c); });
-  std::vector<ChangeRequest> sorted;
-  for (size_t k : order) sorted.push_back(std::move(requests[k]));
-  std::string names;
-  for (const GroupWork* g : work)
-    if (g->bounce && !g->corrections.empty()) names += (names.empty() ? "" : ", ") + g->lg.name;
-  progress.begin("bounce of overlaps: " + names, sorted.size());
-  std::vector<double> solve_s;
-  std::vector<BounceMap> joint = ind->changes(sorted, b.threads, &solve_s, &progress);
-  progress.end();
-  std::vector<double> by_group(work.size(), 0.0);
-  for (size_t n = 0; n < order.size(); ++n) by_group[jobs[order[n]].work] += solve_s[n];
-  std::vector<size_t> at(jobs.size());  // job -> its place in `joint`
-  for (size_t n = 0; n < order.size(); ++n) at[order[n]] = n;
+  std::stable_sort(jobs.begin(), jobs.end(),
+                   [](const Job& a, const Job& c) { return a.objects < c.objects; });
+  std::vector<ChangeRequest> requests;
+  std::vector<size_t> group_of;
+  for (const Job& job : jobs) {
+    GroupWork& g = *work[job.work];
+    const PairCorrectionMap& pc = g.corrections[job.pair];
+    const auto [sa, sb] = g.kept_pairs[job.pair];
+    ChangeRequest r;
+    r.group = &g.gb;
+    r.threshold = g.lg.threshold;
+    r.present.assign(b.scene.objects.size(), 0);
+    r.present[size_t(pc.object_a)] = r.present[size_t(pc.object_b)] = 1;
+    r.blocked.sparse = {{&g.dp.shadow[size_t(sa)], 1.0f}, {&g.dp.shadow[size_t(sb)], 1.0f}};
+    r.blocked.dense = {{&pc.map, -1.0f}};
+    if (const DirectPass* points = g.dp.points.get()) {
+      r.blocked_points.sparse = {{&points->shadow[size_t(sa)], 1.0f},
+                                 {&points->shadow[size_t(sb)], 1.0f}};
+      auto it = points->pairs.find({sa, sb});
+      if (it != points->pairs.end()) r.blocked_points.dense = {{&it->second, -1.0f}};
+    }
+    requests.push_back(std::move(r));
+    group_of.push_back(job.work);
+  }
+  std::vector<double> solve_s, by_group;
+  const std::vector<BounceMap> joint = solve_requests(
+      b, work, group_of, requests, "bounce of overlaps", progress, solve_s, by_group);
   parallel_for(int(jobs.size()), b.threads, [&](int kk) {
     const size_t k = size_t(kk);
     GroupWork& g = *work[jobs[k].work];
     PairCorrectionMap& pc = g.corrections[jobs[k].pair];
     const auto [sa, sb] = g.kept_pairs[jobs[k].pair];
-    const BounceMap& ab = joint[at[k]];
+    const BounceMap& ab = joint[k];
     BounceMap p(ab.size());
     for (size_t c = 0; c < p.size(); ++c)
       p[c] = g.change[size_t(sa)][c] + g.change[size_t(sb)][c] - ab[c];
-    if (b.layout.align == 1) pc.direct = g.direct_part(pc.map);
+    if (keeps_direct(b)) pc.direct = g.direct_part(pc.map);
     ind->add(std::move(p), pc.map, &pc.indirect);
   });
   const std::vector<double> s = shares(seconds_since(t0), by_group);

@@ -123,23 +123,7 @@ class GatherIntegrator final : public IndirectIntegrator {
         near_of[j] = &near[j];
       }
     });
-    std::vector<SolveStats> st;
-    std::vector<Bounces> bounces =
-        solve_indirect_many(op_, sources, near_of, options(0.0f, threads), &st, tolerance);
-    std::vector<GroupBounce> out(n);
-    parallel_for(int(n), threads, [&](int jj) {
-      const size_t j = size_t(jj);
-      GroupBounce& g = out[j];
-      g.indirect = bounces[j].total();
-      EmptyRadiance e = empty_radiance(op_, sources[j], bounces[j]);
-      bounces[j] = Bounces{};
-      g.sends = {std::move(e.direct), std::move(e.first), std::move(e.later)};
-      g.peak = peak(g.indirect);
-      g.bounces = st[j].bounces;
-      g.gathers = st[j].gathers;
-    });
-    for (size_t j = 0; j < n; ++j) count(st[j], groups_);
-    return out;
+    return solve_groups(sources, near_of, tolerance, threads, /*sends=*/true);
   }
 
   std::vector<GroupBounce> prepare_many(std::vector<FloatImage> direct,
@@ -158,17 +142,8 @@ class GatherIntegrator final : public IndirectIntegrator {
         near_of[j] = &near[j];
       }
     });
-    std::vector<SolveStats> st;
-    std::vector<Bounces> bounces =
-        solve_indirect_many(op_, sources, near_of, options(threshold, threads), &st);
-    std::vector<GroupBounce> out(n);
-    for (size_t j = 0; j < n; ++j) {
-      count(st[j], groups_);
-      out[j].indirect = bounces[j].total();
-      out[j].peak = peak(out[j].indirect);
-      out[j].bounces = st[j].bounces;
-    }
-    return out;
+    const std::vector<float> tolerance(n, options(threshold, threads).tolerance);
+    return solve_groups(sources, near_of, tolerance, threads, /*sends=*/false);
   }
 
   std::vector<BounceMap> changes(const std::vector<ChangeRequest>& requests, int threads,
@@ -339,6 +314,34 @@ class GatherIntegrator final : public IndirectIntegrator {
     }
     return near_source_of(listed.size(),
                           [&](size_t k) { return std::pair(listed[k], sum.at(listed[k])); });
+  }
+
+  // The bounce light of each source (prepare(), prepare_many()), solved side by side, with what
+  // its changes start from where `sends`.
+  std::vector<GroupBounce> solve_groups(const std::vector<CoarseMap>& sources,
+                                        const std::vector<const NearSource*>& near_of,
+                                        const std::vector<float>& tolerance, int threads,
+                                        bool sends) const {
+    const size_t n = sources.size();
+    std::vector<SolveStats> st;
+    std::vector<Bounces> bounces =
+        solve_indirect_many(op_, sources, near_of, options(0.0f, threads), &st, tolerance);
+    std::vector<GroupBounce> out(n);
+    parallel_for(int(n), threads, [&](int jj) {
+      const size_t j = size_t(jj);
+      GroupBounce& g = out[j];
+      g.indirect = bounces[j].total();
+      if (sends) {
+        EmptyRadiance e = empty_radiance(op_, sources[j], bounces[j]);
+        g.sends = {std::move(e.direct), std::move(e.first), std::move(e.later)};
+      }
+      bounces[j] = Bounces{};
+      g.peak = peak(g.indirect);
+      g.bounces = st[j].bounces;
+      g.gathers = st[j].gathers;
+    });
+    for (size_t j = 0; j < n; ++j) count(st[j], groups_);
+    return out;
   }
 
   SolveOptions options(float threshold, int threads) const {
