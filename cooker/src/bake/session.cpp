@@ -132,10 +132,7 @@ float BakeSession::output_step() const {
 }
 
 GroupBake BakeSession::bake_group(size_t group, Progress& progress, Report& report) const {
-  if (group >= impl_->plan.groups.size())
-    throw CookError("bake: no light group " + std::to_string(group));
-  impl_->trace_shared(progress, report);
-  return std::move(bake_light_groups(impl_->ctx, impl_->plan, {group}, progress, report).front());
+  return std::move(bake_groups({group}, progress, report).front());
 }
 
 std::vector<GroupBake> BakeSession::bake_groups(const std::vector<size_t>& groups,
