@@ -1196,6 +1196,13 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     c.lights.push_back(r);
     c.moving_lights.push_back(m);
   }
+  std::vector<PaneRecord> records;  // an anchor's weight reads every anchor (its normalizer)
+  for (const PaneMap& p : maps.panes) records.push_back(p.record);
+  std::vector<float> normalizer(c.moving_lights.size(), 0.0f);
+  if (!records.empty() && is_anchor(records[0]))
+    for (size_t m = 0; m < c.moving_lights.size(); ++m)
+      normalizer[m] =
+          anchor_normalizer(records.data(), uint32_t(records.size()), c.moving_lights[m].position);
   for (size_t k = 0; k < maps.panes.size(); ++k) {
     PaneRecord pr = maps.panes[k].record;
     pr.light = uint32_t(c.lights.size());
@@ -1203,8 +1210,10 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     for (size_t m = 0; m < c.moving_lights.size(); ++m) {
       const Light& l = scene.lights[size_t(maps.moving_lights[m])];
       const MovingLightRecord& ml = c.moving_lights[m];
-      factor +=
-          l.color * l.intensity * pane_weight(ml, c.lights[ml.light].type, authored_pose(ml), pr);
+      const float w = is_anchor(pr)
+                          ? anchor_weight(pr, ml.position, normalizer[m])
+                          : pane_weight(ml, c.lights[ml.light].type, authored_pose(ml), pr);
+      factor += l.color * l.intensity * w;
     }
     LightRecord r{};
     for (int a = 0; a < 3; ++a) r.color[a] = std::isfinite(factor[a]) ? factor[a] : 0.0f;

@@ -96,6 +96,7 @@ CookOptions parse_cook_options(Args& args, const char* output_what) {
   o.bake.probes.rays = args.int_option("--probe-rays", 0, 1, 65536);
   o.bake.panes = args.int_option("--panes", 0, 1, kMaxPaneOption);
   o.bake.pane_level = args.int_option("--pane-level", -1, 0, int(pack::kMaxPatchLevel));
+  o.bake.anchor_spacing = args.float_option("--anchors", 0.0f, kMinAnchorSpacing, 1e6f);
   o.bake.max_patch_level = args.int_option("--max-patch-level", -1, 0, int(pack::kMaxPatchLevel));
   o.bake.level_tolerance = args.float_option("--level-tolerance", 0.0f, 0.01f, kMaxLevelTolerance);
   o.bake.bounce_tolerance =

@@ -73,6 +73,11 @@ constexpr const char* kCookOptionsHelp =
     "                         bytes; docs/moving_lights.md)\n"
     "  --pane-level L         0-3: the panes' patches at 1/2^L of the indirect map's\n"
     "                         resolution, magnified by the runtime (default 1)\n"
+    "  --anchors M            the moving lights' bounce light baked for light positions on a\n"
+    "                         lattice of M metres over the free space (anchors), blended\n"
+    "                         around the light by the runtime, instead of on panes: point\n"
+    "                         lights of one range and radius only; stored at --pane-level\n"
+    "                         (docs/moving_lights.md, \"Anchors\")\n"
     "  --max-patch-level L    0-3: each light-map patch stored at the coarsest level up to L\n"
     "                         (1/2^L of the light map's resolution per axis, magnified\n"
     "                         bilinearly by the runtime) whose magnification stays within\n"
@@ -263,8 +268,8 @@ const Verb kVerbs[] = {
      "[--gather-rays N] [--indirect-scale K] [--denoise N] [--contact-texels] [--area-samples N] "
      "[--texel-samples N] "
      "[--output-step E] [--no-probes] [--probe-spacing M] [--probe-rays N] [--panes N] "
-     "[--pane-level L] [--max-patch-level L] [--level-tolerance S] [--bounce-tolerance S] "
-     "[--seed N] [--threads N] [--quiet]",
+     "[--anchors M] [--pane-level L] [--max-patch-level L] [--level-tolerance S] "
+     "[--bounce-tolerance S] [--seed N] [--threads N] [--quiet]",
      kCookHelp},
     {"plan", lightpatch::tool::verb_plan, "plan SCENE -o DIR [cook's options]", kPlanHelp},
     {"cook-job", lightpatch::tool::verb_cook_job,

@@ -44,6 +44,16 @@ pack::PaneRecord floor_pane() {
   return p;
 }
 
+// `pane` made an anchor (pack_format.h, "Anchors") at its eye on a lattice of `spacing` metres.
+pack::PaneRecord as_anchor(pack::PaneRecord pane, float spacing) {
+  pane.point_count = 0;
+  pane.normal[0] = pane.normal[1] = 0.0f;
+  pane.normal[2] = 1.0f;
+  pane.radius = spacing;
+  for (pack::PanePoint& pt : pane.points) pt = pack::PanePoint{};
+  return pane;
+}
+
 pack::MovingLightRecord point_light() {
   pack::MovingLightRecord m{};
   m.direction[1] = -1.0f;
@@ -192,6 +202,68 @@ TEST(MovingLights, AnOccluderHidesTheLightAndVisibilityIsContinuous) {
   EXPECT_EQ(pane_weight(m, pack::kLightPoint, pose, p), 0.0f);
 }
 
+// Anchors: the whole sphere's depth map maps back to its texels, the blend is trilinear over a
+// lattice cell where every anchor sees the light, an anchor that does not see it is left out and
+// the others renormalised, and outside every cell nothing weighs.
+TEST(MovingLights, AnchorDepthDirectionInvertsTheVisibilityLookup) {
+  pack::PaneRecord a = as_anchor(floor_pane(), 1.0f);
+  for (uint32_t y = 0; y < kPaneDepthSize; ++y) {
+    for (uint32_t x = 0; x < kPaneDepthSize; ++x) {
+      float dir[3];
+      anchor_depth_direction(x, y, dir);
+      EXPECT_NEAR(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2], 1.0f, 1e-5f);
+      // Only texel (x, y) holds a surface, 1 m away: a point 2 m along its centre direction is
+      // hidden (the lookup lands on that texel's centre), one 0.5 m along it is seen.
+      for (uint16_t& d : a.depth) d = 0xFFFFu;
+      a.depth[y * kPaneDepthSize + x] = uint16_t(65535.0f / a.depth_range);
+      const float far[3] = {2.0f * dir[0], 2.0f * dir[1], 2.0f * dir[2]};
+      const float near[3] = {0.5f * dir[0], 0.5f * dir[1], 0.5f * dir[2]};
+      EXPECT_NEAR(anchor_visibility(a, far), 0.0f, 1e-4f) << x << ", " << y;
+      EXPECT_EQ(anchor_visibility(a, near), 1.0f) << x << ", " << y;
+    }
+  }
+  const float at[3] = {0.0f, 0.0f, 0.0f};
+  EXPECT_EQ(anchor_visibility(a, at), 1.0f);
+}
+
+TEST(MovingLights, AnchorsBlendTrilinearlyAndLeaveOutWhatTheyDoNotSee) {
+  std::vector<pack::PaneRecord> cell;
+  for (int k = 0; k < 8; ++k) {
+    pack::PaneRecord a = as_anchor(floor_pane(), 1.0f);
+    a.eye[0] = float(k & 1);
+    a.eye[1] = float((k >> 1) & 1);
+    a.eye[2] = float((k >> 2) & 1);
+    cell.push_back(a);
+  }
+  const float p[3] = {0.25f, 0.5f, 0.875f};
+  const float n = anchor_normalizer(cell.data(), uint32_t(cell.size()), p);
+  EXPECT_NEAR(n, 1.0f, 1e-6f);  // the tents are a partition of unity
+  float sum = 0.0f;
+  for (const pack::PaneRecord& a : cell) {
+    float tri = 1.0f;
+    for (int i = 0; i < 3; ++i) tri *= a.eye[i] > 0.5f ? p[i] : 1.0f - p[i];
+    EXPECT_NEAR(anchor_weight(a, p, n), tri, 1e-6f);
+    sum += anchor_weight(a, p, n);
+  }
+  EXPECT_NEAR(sum, 1.0f, 1e-6f);
+  // A wall between anchor 0 and the light: anchor 0 weighs nothing, the others share its part.
+  for (uint16_t& d : cell[0].depth) d = uint16_t(0.1f / cell[0].depth_range * 65535.0f);
+  const float n0 = anchor_normalizer(cell.data(), uint32_t(cell.size()), p);
+  EXPECT_NEAR(n0, 1.0f - 0.75f * 0.5f * 0.125f, 1e-6f);
+  EXPECT_EQ(anchor_weight(cell[0], p, n0), 0.0f);
+  sum = 0.0f;
+  for (const pack::PaneRecord& a : cell) sum += anchor_weight(a, p, n0);
+  EXPECT_NEAR(sum, 1.0f, 1e-6f);
+  // Outside the cell, or where no anchor sees the light: no weight at all.
+  const float out[3] = {2.5f, 0.5f, 0.5f};
+  EXPECT_EQ(anchor_normalizer(cell.data(), uint32_t(cell.size()), out), 0.0f);
+  EXPECT_EQ(anchor_weight(cell[1], out, 0.0f), 0.0f);
+  // At an anchor, that anchor alone.
+  const float corner[3] = {1.0f, 1.0f, 0.0f};
+  const float nc = anchor_normalizer(cell.data(), uint32_t(cell.size()), corner);
+  EXPECT_NEAR(anchor_weight(cell[3], corner, nc), 1.0f, 1e-6f);
+}
+
 SyntheticOptions moving_options(uint32_t seed = 1) {
   SyntheticOptions o;
   o.seed = seed;
@@ -281,7 +353,19 @@ TEST(MovingLights, ValidationRefusesEachMalformedCase) {
       {"pane 0: eye", [nan](L&, M&, P& p) { p[0].eye[0] = nan; }},
       {"pane 2: radius", [](L&, M&, P& p) { p[2].radius = 0.0f; }},
       {"pane 2: depth range", [](L&, M&, P& p) { p[2].depth_range = -1.0f; }},
-      {"0 entry points", [](L&, M&, P& p) { p[0].point_count = 0; }},
+      // No entry points: an anchor (pack_format.h, "Anchors"), with an anchor's fields.
+      {"anchor 0: normal is not (0, 0, 1)", [](L&, M&, P& p) { p[0].point_count = 0; }},
+      {"pane 1: a pane among anchors", [](L&, M&, P& p) { p[0] = as_anchor(p[0], p[0].radius); }},
+      {"pane 2: an anchor among panes", [](L&, M&, P& p) { p[2] = as_anchor(p[2], p[2].radius); }},
+      {"anchor 1: spacing differs from anchor 0's",
+       [](L&, M&, P& p) {
+         for (size_t k = 0; k < p.size(); ++k) p[k] = as_anchor(p[k], k == 1 ? 2.0f : 1.0f);
+       }},
+      {"unused entry point 3 not zero",
+       [](L&, M&, P& p) {
+         for (pack::PaneRecord& r : p) r = as_anchor(r, 1.0f);
+         p[0].points[3].normal[0] = 1.0f;
+       }},
       {"9 entry points", [](L&, M&, P& p) { p[0].point_count = 9; }},
       {"unused entry point 5 not zero", [](L&, M&, P& p) { p[0].points[5].position[0] = 1.0f; }},
       {"entry point 0 normal", [](L&, M&, P& p) { p[0].points[0].normal[1] = 2.0f; }},
@@ -292,6 +376,11 @@ TEST(MovingLights, ValidationRefusesEachMalformedCase) {
     EXPECT_NE(m.find(c.expect), std::string::npos)
         << "expected '" << c.expect << "', got '" << m << "'";
   }
+  // Every record an anchor of one lattice: a valid pack.
+  EXPECT_EQ(refusal([](L&, M&, P& p) {
+              for (pack::PaneRecord& r : p) r = as_anchor(r, 1.0f);
+            }),
+            "");
   // Two lights flagged moving, one record; a flagged light without the sections.
   SyntheticOptions two = moving_options();
   two.moving_lights = 2;

@@ -97,6 +97,7 @@ json settings_json(const CookSettings& s) {
           {"probe_rays", b.probes.rays},
           {"panes", b.panes},
           {"pane_level", b.pane_level},
+          {"anchor_spacing", b.anchor_spacing},
           {"max_patch_level", b.max_patch_level},
           {"level_tolerance", b.level_tolerance},
           {"bounce_tolerance", b.bounce_tolerance},
@@ -167,6 +168,10 @@ CookSettings settings_from_json(const json& j, const std::string& file) {
   s.bake.probes.rays = int_field(j, "probe_rays", 0, 1 << 20, file);
   s.bake.panes = int_field(j, "panes", 0, kMaxPaneOption, file);
   s.bake.pane_level = int_field(j, "pane_level", -1, int(pack::kMaxPatchLevel), file);
+  s.bake.anchor_spacing = field<float>(j, "anchor_spacing", file);
+  if (!(s.bake.anchor_spacing == 0.0f ||
+        (s.bake.anchor_spacing >= kMinAnchorSpacing && s.bake.anchor_spacing <= 1e6f)))
+    throw CookError(file + ": \"anchor_spacing\" out of range");
   s.bake.max_patch_level = int_field(j, "max_patch_level", -1, int(pack::kMaxPatchLevel), file);
   s.bake.level_tolerance = field<float>(j, "level_tolerance", file);
   if (!(s.bake.level_tolerance <= kMaxLevelTolerance))  // <= 0 (or -0): the default

@@ -212,15 +212,7 @@ bool describe(const std::vector<uint32_t>& members, const TexelSet& texels, cons
     for (uint32_t x = 0; x < n; ++x) {
       float dir[3];
       pane_depth_direction(r.normal, x, y, dir);
-      const Hit h = tracer.intersect(eye, glm::vec3(dir[0], dir[1], dir[2]), eps, r.depth_range,
-                                     /*with_objects=*/false);
-      // Rounded up: a light exactly at the first surface counts as seen.
-      uint16_t q = 65535;
-      if (h.hit) {
-        const double v = std::ceil(double(h.t) / double(r.depth_range) * 65535.0);
-        q = uint16_t(std::clamp(v, 0.0, 65534.0));
-      }
-      r.depth[y * n + x] = q;
+      r.depth[y * n + x] = depth_code(tracer, eye, dir, eps, r.depth_range);
     }
   }
   // How evenly a light in front of the pane lights it: lights stand halfway from each entry point
@@ -291,6 +283,15 @@ std::vector<int32_t> pane_of_texels(const std::vector<PaneMap>& panes, size_t te
     }
   }
   return pane_of;
+}
+
+uint16_t depth_code(const Tracer& tracer, const glm::vec3& eye, const float dir[3], float eps,
+                    float depth_range) {
+  const Hit h = tracer.intersect(eye, glm::vec3(dir[0], dir[1], dir[2]), eps, depth_range,
+                                 /*with_objects=*/false);
+  if (!h.hit) return 65535;
+  const double v = std::ceil(double(h.t) / double(depth_range) * 65535.0);
+  return uint16_t(std::clamp(v, 0.0, 65534.0));
 }
 
 float pane_significance(const Scene& scene, float step) {

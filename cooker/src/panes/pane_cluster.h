@@ -34,6 +34,12 @@ struct PaneClusterOptions {
 std::vector<PaneMap> cluster_panes(const Scene& scene, const TexelSet& texels, const Tracer& tracer,
                                    const PaneClusterOptions& options);
 
+// A depth map texel (pack_format.h, PaneRecord): the distance from `eye` along unit `dir` to the
+// first static surface within `depth_range` in 65535ths of it, rounded up (a light exactly at the
+// first surface counts as seen), 65535 for none.
+uint16_t depth_code(const Tracer& tracer, const glm::vec3& eye, const float dir[3], float eps,
+                    float depth_range);
+
 // Each of `texel_count` texels' pane (index into `panes`), -1 for none. Throws CookError when a
 // texel is out of range or in two panes (cluster_panes() partitions them).
 std::vector<int32_t> pane_of_texels(const std::vector<PaneMap>& panes, size_t texel_count);

@@ -14,10 +14,6 @@ namespace lightpatch::cooker {
 namespace {
 
 constexpr float kAutoSpacing = 1.0f;  // metres: a character's scale
-// A point whose validity rays hit the back of a surface more often than this is inside solid
-// geometry (in a wall, under the floor, inside a closed box): nothing moves there.
-constexpr float kInsideFraction = 0.25f;
-constexpr int kValidityRays = 64;
 
 int grid_points_along(float extent, float spacing) {
   return int(std::floor(std::max(0.0f, extent) / spacing)) + 1;
@@ -75,14 +71,7 @@ ProbeBake place_probes(const Scene& scene, const Tracer& tracer, const ProbeOpti
   std::vector<uint8_t> inside(count, 0);
   parallel_for(int(count), threads, [&](int i) {
     set_worker_fp_mode();
-    const glm::vec3 p = point(size_t(i));
-    int back = 0;
-    for (int r = 0; r < kValidityRays; ++r) {
-      const glm::vec3 dir = sphere_direction(r, kValidityRays, 0.0f);
-      const Hit h = tracer.intersect(p, dir, 0.0f, std::numeric_limits<float>::max(), false);
-      if (h.hit && glm::dot(dir, h.geometric_normal) > 0.0f) ++back;
-    }
-    inside[size_t(i)] = back > int(kInsideFraction * kValidityRays) ? 1 : 0;
+    inside[size_t(i)] = inside_solid(tracer, point(size_t(i))) ? 1 : 0;
   });
 
   out.has_grid = true;

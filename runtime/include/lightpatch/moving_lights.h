@@ -65,9 +65,40 @@ float pane_visibility(const pack::PaneRecord& pane, const float light_position[3
 float pane_weight(const pack::MovingLightRecord& light, uint32_t type, const LightPose& pose,
                   const pack::PaneRecord& pane);
 
+// Anchors (pack_format.h, "Anchors": a PaneRecord with point_count 0).
+inline bool is_anchor(const pack::PaneRecord& pane) {
+  return pane.point_count == 0;
+}
+
+// The unit world direction of the centre of depth texel (x, y) of an anchor: the inverse of the
+// octahedral mapping of pack_format.h's PaneRecord (whole sphere, world axes). Precondition: x, y
+// < kPaneDepthSize.
+void anchor_depth_direction(uint32_t x, uint32_t y, float out_dir[3]);
+
+// The anchor's visibility of a point at `position` (world space, metres), in [0, 1]: the
+// bilinear blend of the 4 depth texels around the point's direction from the anchor (clamped at
+// the map's edges) of [distance <= depth] (65535: no surface). 1 at the anchor itself.
+float anchor_visibility(const pack::PaneRecord& anchor, const float position[3]);
+
+// The lattice's tent at `position`: prod over axes of max(0, 1 - |position - eye| / radius), in
+// [0, 1]; nonzero for the (at most 8) anchors of the lattice cell holding `position`.
+float anchor_tent(const pack::PaneRecord& anchor, const float position[3]);
+
+// sum over the pack's anchors b of T(p - b) * V(b, p) for a light at `position`: the denominator
+// of w(m, a) (pack_format.h). O(anchors). 0 without anchors.
+float anchor_normalizer(const pack::PaneRecord* anchors, uint32_t count, const float position[3]);
+
+// w(m, a) = T(p - a) V(a, p) / normalizer for a light at `position`, `normalizer` from
+// anchor_normalizer() of the same position (0 when the normalizer is 0). In [0, 1].
+float anchor_weight(const pack::PaneRecord& anchor, const float position[3], float normalizer);
+
 // f_pane (linear RGB, >= 0, finite) of pane `pane` (an index below pack.pane_count()) for the
 // moving lights' factors and poses in `state` (a state of `pack`): the sum above, over the moving
-// lights in pack order. O(moving lights * points).
+// lights in pack order. O(moving lights * points) for a pane, O(moving lights * panes) for an
+// anchor (its normalizer); pane_factors() gives every pane's at once in O(moving lights * panes).
 void pane_factor(const PackView& pack, uint32_t pane, const SceneState& state, float out_rgb[3]);
+
+// pane_factor() of every pane k < pack.pane_count() into out_rgb[3k..3k+2].
+void pane_factors(const PackView& pack, const SceneState& state, float* out_rgb);
 
 }  // namespace lightpatch

@@ -98,6 +98,18 @@
 // name and no shadow or pair-correction group; a pane's probe set is a contribution set too (the
 // light its members at irradiance 1 and its map reflect towards the probe: at a probe even the
 // members' first bounce is indirect light). Moving lights have no group and no probe set.
+//
+// Anchors (docs/moving_lights.md, "Anchors"): instead of panes, a pack may hold the moving lights'
+// bounce light on a lattice of light positions in the scene's free space. An anchor is a
+// PaneRecord with point_count 0 (a pack's pane records are all panes or all anchors); its group
+// holds the bounce light of a unit moving light (colour (1,1,1), intensity 1, the moving lights'
+// shared range and radius) standing at the anchor. The runtime blends the anchors around each
+// moving light, trilinearly over the lattice, leaving out an anchor that does not see the light:
+//   f_anchor = sum over moving lights m (on) of colour_m * intensity_m * w(m, anchor)
+//   w(m, a) = T(p_m - a) * V(a, p_m) / sum over anchors b of T(p_m - b) * V(b, p_m)
+// with T(d) = prod over axes of max(0, 1 - |d_i| / spacing) (the lattice's tent, spacing the
+// anchors' shared PaneRecord::radius) and V the anchor's filtered visibility of p_m (its
+// spherical depth map); w is 0 where the sum is 0 (no anchor around sees the light).
 #pragma once
 
 #include <cstddef>
@@ -114,7 +126,9 @@ constexpr uint32_t kMagic = 0x314B504Cu;  // "LPK1" read as little-endian bytes 
 // 14-15, LightRecord::flags, kLightPane); later in version 5, magnified patches (PatchFlags
 // kFlagLevelMask), which a reader built before them refuses as unknown patch flags. Version 6:
 // PatchRecord grew to 28 bytes with a per-patch tint. Version 7: 2-channel patches with a second
-// tint (PatchRecord::tint_b; records of 32 bytes). A reader accepts its own version only (a
+// tint (PatchRecord::tint_b; records of 32 bytes); later in version 7, anchors (PaneRecord with
+// point_count 0), which a reader built before them refuses as panes without entry points. A
+// reader accepts its own version only (a
 // pack of another version is refused with a message to cook it again).
 constexpr uint32_t kVersion = 7;
 constexpr uint32_t kSectionAlignment = 256;
@@ -477,13 +491,20 @@ static_assert(sizeof(PanePoint) == 24);
 // of [|d| <= depth_i] where depth_i = depth[y * N + x] / 65535 * depth_range: the distance from
 // the eye to the first static surface along texel (x, y)'s centre direction (65535: none within
 // depth_range, visible at any distance). Sorted by light, each pane light exactly once.
+//
+// An anchor (point_count 0; see "Anchors" above) is a light position: eye is where it stands,
+// normal is (0, 0, 1), radius is the lattice spacing (the same for every anchor of a pack), the
+// points are zero, and the depth map covers the whole sphere, octahedrally in world axes: with
+// (x, y, z) = d / (|d.x| + |d.y| + |d.z|),
+//   (s, r) = (x, y) where z >= 0, else ((1 - |y|) sign(x), (1 - |x|) sign(y))  (sign(0) = 1)
+// and (u, v), V and depth_i as for a pane (the bilinear weights clamped at the map's edges).
 struct PaneRecord {
   uint32_t light;        // index into kLights (a kLightPane)
   float eye[3];          // world space, metres, finite: where the depth map looks from
   float normal[3];       // unit, finite: the pane's orientation (the hemisphere's axis)
   float radius;          // metres, finite, > 0: the pane's extent (floors squared distances)
   float depth_range;     // metres, finite, > 0
-  uint32_t point_count;  // entry points, 1..kMaxPanePoints (unused ones are zero)
+  uint32_t point_count;  // entry points, 1..kMaxPanePoints (unused ones are zero); 0: an anchor
   PanePoint points[kMaxPanePoints];
   uint16_t depth[kPaneDepthSize * kPaneDepthSize];
 };

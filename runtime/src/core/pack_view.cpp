@@ -555,9 +555,21 @@ Status Validator::check_moving(const Header& h, const LightRecord* lights,
       return fail(Status::kCorrupt, "pane %u: radius is not finite and > 0", k);
     if (!std::isfinite(p.depth_range) || !(p.depth_range > 0.0f))
       return fail(Status::kCorrupt, "pane %u: depth range is not finite and > 0", k);
-    if (p.point_count == 0 || p.point_count > kMaxPanePoints) {
-      return fail(Status::kCorrupt, "pane %u: %u entry points (must be 1..%u)", k, p.point_count,
+    if (p.point_count > kMaxPanePoints) {
+      return fail(Status::kCorrupt, "pane %u: %u entry points (must be 0..%u)", k, p.point_count,
                   kMaxPanePoints);
+    }
+    // All panes or all anchors (pack_format.h, "Anchors"), the anchors on one lattice.
+    if ((p.point_count == 0) != (panes[0].point_count == 0)) {
+      return fail(Status::kCorrupt, "pane %u: %s among %s", k,
+                  p.point_count == 0 ? "an anchor" : "a pane",
+                  panes[0].point_count == 0 ? "anchors" : "panes");
+    }
+    if (p.point_count == 0) {
+      if (p.normal[0] != 0.0f || p.normal[1] != 0.0f || p.normal[2] != 1.0f)
+        return fail(Status::kCorrupt, "anchor %u: normal is not (0, 0, 1)", k);
+      if (p.radius != panes[0].radius)
+        return fail(Status::kCorrupt, "anchor %u: spacing differs from anchor 0's", k);
     }
     for (uint32_t i = 0; i < kMaxPanePoints; ++i) {
       const PanePoint& pt = p.points[i];

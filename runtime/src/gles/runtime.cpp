@@ -743,7 +743,7 @@ void Runtime::update_panes(FrameStats* stats) {
   if (!panes_dirty_ && !panes_off_) return;
   const bool moved = panes_dirty_;
   if (moved) {
-    for (uint32_t k = 0; k < np; ++k) pane_factor(pack_, k, wanted_, pane_target_ + 3 * k);
+    pane_factors(pack_, wanted_, pane_target_);
     panes_dirty_ = false;
   }
   // Errors, and the light the panes bring at most (the tolerance's scale).

@@ -41,6 +41,8 @@ constexpr int kDefaultPanes = 64;
 constexpr int kMaxPaneOption = 1024;
 // The panes' storage level by default (BakeOptions::pane_level).
 constexpr int kDefaultPaneLevel = 1;
+// The finest anchor lattice BakeOptions::anchor_spacing may ask for (metres).
+constexpr float kMinAnchorSpacing = 0.05f;
 
 struct BakeOptions {
   Quality quality = Quality::kPreview;
@@ -83,6 +85,11 @@ struct BakeOptions {
   // patches": 1/2^level of its resolution per axis, magnified by the runtime); < 0 =
   // kDefaultPaneLevel.
   int pane_level = -1;
+  // > 0: the moving lights' bounce light is baked at anchors, light positions on a lattice of
+  // this spacing (metres) over the scene's free space, instead of on panes (pack_format.h,
+  // "Anchors"; docs/moving_lights.md, "Anchors"). Needs the moving lights to be point lights of
+  // one range and radius. 0: panes.
+  float anchor_spacing = 0.0f;
   // Light-map patches each stored at the coarsest level up to max_patch_level whose bilinear
   // magnification stays within level_tolerance 8-bit output steps of the full-resolution patch
   // at every texel (PackOptions, pack_builder.h); max_patch_level 0 keeps them all texel for
