@@ -10,7 +10,6 @@
 
 #include "bake/direct_pass.h"
 #include "bake/session.h"
-#include "direct_light.h"
 #include "indirect/integrator.h"
 #include "lightpatch/cooker/error.h"
 #include "panes/anchors.h"
@@ -86,8 +85,6 @@ void anchor_direct(const BakeContext& b, int li, const pack::PaneRecord& a, Floa
   posed.position = glm::vec3(a.eye[0], a.eye[1], a.eye[2]);
   const glm::vec3 eye = posed.position;
   const float near2 = (kAnchorNearField * a.radius) * (kAnchorNearField * a.radius);
-  const float floor2 = std::max(light.radius * light.radius, 1e-8f * scene.scale() * scene.scale());
-  const float eps = b.tracer.epsilon();
   const int max_objects = int(scene.objects.size());
   std::vector<LightSample> samples, dense;
   SampleRays batch;
@@ -102,8 +99,7 @@ void anchor_direct(const BakeContext& b, int li, const pack::PaneRecord& a, Floa
     if (!texels.valid[t] || !sends(scene, texels, uint32_t(t))) continue;
     const glm::vec3 x = texels.position[t];
     const glm::vec3 l = eye - x;
-    const float d2 = glm::dot(l, l);
-    if (d2 < near2) {
+    if (glm::dot(l, l) < near2) {
       samples.clear();
       b.light_samples(li, t, samples, &posed);
       batch.trace(b.tracer, samples, max_objects);
@@ -117,13 +113,7 @@ void anchor_direct(const BakeContext& b, int li, const pack::PaneRecord& a, Floa
       direct.data[t] = clear_sum();
       continue;
     }
-    const float d = std::sqrt(d2);
-    const glm::vec3 dir = l / d;
-    const float cos_x = glm::dot(texels.normal[t], dir);
-    const float window = range_window(light.range, d);
-    if (!(cos_x > 0.0f) || !(window > 0.0f)) continue;
-    if (b.tracer.occluded_static(x, dir, eps, d - eps)) continue;
-    direct.data[t] = cos_x / std::max(d2, floor2) * window;
+    direct.data[t] = anchor_irradiance(scene, b.tracer, light, eye, x, texels.normal[t]);
   }
   at_points.clear();
   const DirectPoints* pts = b.indirect->direct_points();

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "direct_light.h"
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/moving_lights.h"
 #include "panes/pane_cluster.h"
@@ -75,6 +76,21 @@ std::vector<PaneMap> place_anchors(const Scene& scene, const Tracer& tracer, flo
     }
   });
   return out;
+}
+
+float anchor_irradiance(const Scene& scene, const Tracer& tracer, const Light& light,
+                        const glm::vec3& eye, const glm::vec3& x, const glm::vec3& n) {
+  const glm::vec3 l = eye - x;
+  const float d2 = glm::dot(l, l), d = std::sqrt(d2);
+  if (!(d > 0.0f)) return 0.0f;
+  const glm::vec3 dir = l / d;
+  const float cos_x = glm::dot(n, dir);
+  const float window = range_window(light.range, d);
+  if (!(cos_x > 0.0f) || !(window > 0.0f)) return 0.0f;
+  const float eps = tracer.epsilon();
+  if (tracer.occluded_static(x, dir, eps, d - eps)) return 0.0f;
+  const float floor2 = std::max(light.radius * light.radius, 1e-8f * scene.scale() * scene.scale());
+  return cos_x / std::max(d2, floor2) * window;
 }
 
 }  // namespace lightpatch::cooker

@@ -19,4 +19,12 @@ namespace lightpatch::cooker {
 std::vector<PaneMap> place_anchors(const Scene& scene, const Tracer& tracer, float spacing,
                                    int threads);
 
+// The irradiance at a receiver at `x` with unit normal `n` from moving light `light` (a point
+// light, intensity 1, white) standing at `eye`: cos / max(d^2, r^2), r its radius (at least a
+// scene-scaled floor), times its range window; 0 where static geometry blocks the segment (one
+// shadow ray) or the receiver faces away. An anchor's map draws its direct light so beyond its
+// near field (panes.cpp), its probe sets at every texel a probe sees (probe_bake.cpp).
+float anchor_irradiance(const Scene& scene, const Tracer& tracer, const Light& light,
+                        const glm::vec3& eye, const glm::vec3& x, const glm::vec3& n);
+
 }  // namespace lightpatch::cooker

@@ -33,6 +33,7 @@
 #include "lightpatch/cooker/probes.h"
 #include "lightpatch/moving_lights.h"
 #include "lightpatch/spherical_harmonics.h"
+#include "panes/anchors.h"
 #include "panes/pane_cluster.h"
 #include "probes/probe_rays.h"
 #include "surface_albedo.h"
@@ -235,13 +236,10 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
   const size_t panes = maps.panes.size();
   const int first_pane = int(maps.lights.size() + maps.moving_lights.size());
   const std::vector<int32_t> pane_of = pane_of_texels(maps.panes, texels.valid.size());
-  // Anchors: the moving lights' shared range and radius (panes.cpp checks they are one).
-  float anchor_range = 0.0f, anchor_floor2 = 0.0f;
-  if (!maps.moving_lights.empty()) {
-    const Light& m = scene.lights[size_t(maps.moving_lights.front())];
-    anchor_range = m.range;
-    anchor_floor2 = std::max(m.radius * m.radius, 1e-8f * scene.scale() * scene.scale());
-  }
+  // Anchors: the moving light they are baked for (panes.cpp checks that all share its range and
+  // radius).
+  const Light* anchor_light =
+      maps.moving_lights.empty() ? nullptr : &scene.lights[size_t(maps.moving_lights.front())];
 
   std::vector<std::vector<std::pair<SetKey, Sh>>> per_probe(probes.probes.size());
   progress.begin("light probes", probes.probes.size());
@@ -323,22 +321,14 @@ void bake_probes(ProbeBake& probes, const Scene& scene, const Layout& layout,
       for (size_t k = 0; k < panes; ++k) {
         const PaneMap& pm = maps.panes[k];
         const bool anchor = is_anchor(pm.record);
-        const float eps = tracer.epsilon();
         const glm::vec3 eye(pm.record.eye[0], pm.record.eye[1], pm.record.eye[2]);
         for (const ProbeRay* r : seeing) {
           float b[3];
           pane_bounce_at(pm, uint32_t(texels.width), r->texel, b);
           glm::vec3 v(b[0], b[1], b[2]);
-          if (anchor) {
-            const glm::vec3 x = texels.position[r->texel];
-            const glm::vec3 l = eye - x;
-            const float d2 = glm::dot(l, l), d = std::sqrt(d2);
-            const float cos_x = d > 0.0f ? glm::dot(texels.normal[r->texel], l) / d : 0.0f;
-            if (cos_x > 0.0f) {
-              if (!tracer.occluded_static(x, l / d, eps, d - eps))
-                v += glm::vec3(cos_x / std::max(d2, anchor_floor2) * range_window(anchor_range, d));
-            }
-          }
+          if (anchor)
+            v += glm::vec3(anchor_irradiance(scene, tracer, *anchor_light, eye,
+                                             texels.position[r->texel], texels.normal[r->texel]));
           if (v != glm::vec3(0.0f)) add(pane[k], r->y, r->rho * v * ray_weight);
         }
         if (std::any_of(pane[k].begin(), pane[k].end(), [](float v) { return v != 0.0f; }))

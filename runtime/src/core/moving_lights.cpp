@@ -51,6 +51,14 @@ float filtered_visibility(const PaneRecord& record, float s, float r, float dist
   return clamp01(top * (1.0f - wv) + bottom * wv);
 }
 
+// The octahedral map's fold of the lower hemisphere over the square's diagonals (pack_format.h,
+// PaneRecord, an anchor's map): (s, r) -> ((1 - |r|) sign(s), (1 - |s|) sign(r)), sign(0) = 1. Its
+// own inverse on the square.
+void octahedral_fold(float s, float r, float* fs, float* fr) {
+  *fs = (1.0f - std::fabs(r)) * (s >= 0.0f ? 1.0f : -1.0f);
+  *fr = (1.0f - std::fabs(s)) * (r >= 0.0f ? 1.0f : -1.0f);
+}
+
 }  // namespace
 
 bool normalise_pose(LightPose* pose) {
@@ -153,11 +161,8 @@ void anchor_depth_direction(uint32_t x, uint32_t y, float out_dir[3]) {
   const float s = (float(x) + 0.5f) / n * 2.0f - 1.0f;
   const float r = (float(y) + 0.5f) / n * 2.0f - 1.0f;
   float d[3] = {s, r, 1.0f - std::fabs(s) - std::fabs(r)};
-  if (d[2] < 0.0f) {  // the lower hemisphere, folded over the diagonals
-    d[0] = (1.0f - std::fabs(r)) * (s >= 0.0f ? 1.0f : -1.0f);
-    d[1] = (1.0f - std::fabs(s)) * (r >= 0.0f ? 1.0f : -1.0f);
-  }
-  const float len = std::sqrt(dot3(d, d));  // >= 1/sqrt(3): |x| + |y| + |z| = 1
+  if (d[2] < 0.0f) octahedral_fold(s, r, &d[0], &d[1]);  // the lower hemisphere
+  const float len = std::sqrt(dot3(d, d));               // >= 1/sqrt(3): |x| + |y| + |z| = 1
   for (int a = 0; a < 3; ++a) out_dir[a] = d[a] / len;
 }
 
@@ -167,12 +172,7 @@ float anchor_visibility(const PaneRecord& anchor, const float position[3]) {
   const float l1 = std::fabs(d[0]) + std::fabs(d[1]) + std::fabs(d[2]);
   if (!(l1 > 0.0f)) return 1.0f;  // at the anchor (or NaN, which the finite inputs exclude)
   float s = d[0] / l1, r = d[1] / l1;
-  if (d[2] < 0.0f) {
-    const float fs = (1.0f - std::fabs(r)) * (s >= 0.0f ? 1.0f : -1.0f);
-    const float fr = (1.0f - std::fabs(s)) * (r >= 0.0f ? 1.0f : -1.0f);
-    s = fs;
-    r = fr;
-  }
+  if (d[2] < 0.0f) octahedral_fold(d[0] / l1, d[1] / l1, &s, &r);
   return filtered_visibility(anchor, s, r, std::sqrt(dot3(d, d)));
 }
 
