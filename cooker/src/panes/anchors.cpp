@@ -19,38 +19,27 @@ std::vector<PaneMap> place_anchors(const Scene& scene, const Tracer& tracer, flo
   if (!(spacing > 0.0f) || !std::isfinite(spacing))
     throw CookError("anchor spacing must be a finite number of metres > 0");
   const glm::vec3 extent = glm::max(scene.bounds_max - scene.bounds_min, glm::vec3(0.0f));
-  glm::ivec3 size(0);
-  double points = 1.0;
-  for (int a = 0; a < 3; ++a) {
-    const double n = std::floor(double(extent[a]) / double(spacing)) + 1.0;
-    points *= n;
-    size[a] = int(std::min(n, 1e6));
-  }
+  double points = 1.0;  // counted in doubles before the grid's ints are made
+  for (int a = 0; a < 3; ++a) points *= std::floor(double(extent[a]) / double(spacing)) + 1.0;
   // Every lattice point is tested; the pack holds at most kMaxPanes of them, and a lattice far
   // larger than that is a spacing mistake whatever lies inside solid geometry.
   if (points > 16.0 * double(pack::kMaxPanes))
     throw CookError("an anchor spacing of " + std::to_string(spacing) + " m makes " +
                     std::to_string(uint64_t(points)) +
                     " lattice points over the scene's bounds; use a larger spacing");
-  const glm::vec3 origin =
-      scene.bounds_min + 0.5f * (extent - spacing * glm::vec3(size - glm::ivec3(1)));
-  const size_t count = size_t(points);
-  auto point = [&](size_t i) {
-    const glm::ivec3 g(int(i % size_t(size.x)), int(i / size_t(size.x) % size_t(size.y)),
-                       int(i / (size_t(size.x) * size_t(size.y))));
-    return origin + spacing * glm::vec3(g);
-  };
+  const CentredGrid grid(scene.bounds_min, extent, spacing);
+  const size_t count = grid.count();
   std::vector<uint8_t> inside(count, 0);
   const int workers = worker_count(threads);
   parallel_for(int(count), workers, [&](int i) {
     set_worker_fp_mode();
-    inside[size_t(i)] = inside_solid(tracer, point(size_t(i))) ? 1 : 0;
+    inside[size_t(i)] = inside_solid(tracer, grid.point(size_t(i))) ? 1 : 0;
   });
   std::vector<PaneMap> out;
   for (size_t i = 0; i < count; ++i) {
     if (inside[i]) continue;
     PaneMap a;
-    const glm::vec3 p = point(i);
+    const glm::vec3 p = grid.point(i);
     for (int k = 0; k < 3; ++k) a.record.eye[k] = p[k];
     a.record.normal[2] = 1.0f;
     a.record.radius = spacing;

@@ -15,14 +15,10 @@ namespace {
 
 constexpr float kAutoSpacing = 1.0f;  // metres: a character's scale
 
-int grid_points_along(float extent, float spacing) {
-  return int(std::floor(std::max(0.0f, extent) / spacing)) + 1;
-}
-
 uint64_t grid_points(const glm::vec3& extent, float spacing) {
-  return uint64_t(grid_points_along(extent.x, spacing)) *
-         uint64_t(grid_points_along(extent.y, spacing)) *
-         uint64_t(grid_points_along(extent.z, spacing));
+  return uint64_t(CentredGrid::points_along(extent.x, spacing)) *
+         uint64_t(CentredGrid::points_along(extent.y, spacing)) *
+         uint64_t(CentredGrid::points_along(extent.z, spacing));
 }
 
 // Free distance along +X, -X, +Y, -Y, +Z, -Z to static geometry, capped at `cap`.
@@ -54,36 +50,26 @@ ProbeBake place_probes(const Scene& scene, const Tracer& tracer, const ProbeOpti
   } else {
     while (grid_points(extent, spacing) > kMaxAutoGridPoints) spacing *= 1.25f;
   }
-  const glm::ivec3 size(grid_points_along(extent.x, spacing), grid_points_along(extent.y, spacing),
-                        grid_points_along(extent.z, spacing));
-  // Centred in the bounds, so that the margins on both sides are equal.
-  const glm::vec3 origin =
-      scene.bounds_min + 0.5f * (extent - spacing * glm::vec3(size - glm::ivec3(1)));
-  const size_t count = size_t(size.x) * size_t(size.y) * size_t(size.z);
+  const CentredGrid grid(scene.bounds_min, extent, spacing);
+  const size_t count = grid.count();
   const int threads = worker_count(options.threads);
-  // Grid point i (x fastest, pack::ProbeGridRecord's order).
-  auto point = [&](size_t i) {
-    const glm::ivec3 g(int(i % size_t(size.x)), int(i / size_t(size.x) % size_t(size.y)),
-                       int(i / (size_t(size.x) * size_t(size.y))));
-    return origin + spacing * glm::vec3(g);
-  };
 
   std::vector<uint8_t> inside(count, 0);
   parallel_for(int(count), threads, [&](int i) {
     set_worker_fp_mode();
-    inside[size_t(i)] = inside_solid(tracer, point(size_t(i))) ? 1 : 0;
+    inside[size_t(i)] = inside_solid(tracer, grid.point(size_t(i))) ? 1 : 0;
   });
 
   out.has_grid = true;
-  out.grid_origin = origin;
+  out.grid_origin = grid.origin;
   out.grid_spacing = spacing;
-  out.grid_size = size;
+  out.grid_size = grid.size;
   out.grid_index.assign(count, pack::kNone32);
   for (size_t i = 0; i < count; ++i) {
     if (inside[i]) continue;
     out.grid_index[i] = uint32_t(out.probes.size());
     ProbeBake::Probe probe;
-    probe.position = point(i);
+    probe.position = grid.point(i);
     out.probes.push_back(std::move(probe));
   }
   const size_t grid_kept = out.probes.size();
@@ -104,7 +90,7 @@ ProbeBake place_probes(const Scene& scene, const Tracer& tracer, const ProbeOpti
   std::lock_guard<std::mutex> lock(report.mutex());
   nlohmann::json& r = report.root()["probes"];
   r["spacing_m"] = spacing;
-  r["grid"] = {size.x, size.y, size.z};
+  r["grid"] = {grid.size.x, grid.size.y, grid.size.z};
   r["grid_points"] = count;
   r["grid_probes"] = grid_kept;
   r["inside_geometry"] = count - grid_kept;

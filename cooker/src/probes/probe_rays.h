@@ -5,7 +5,9 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "lightpatch/cooker/tracer.h"
@@ -18,6 +20,29 @@ inline glm::vec3 sphere_direction(int i, int n, float turn) {
   const float phi = 2.39996322973f * float(i) + turn;  // the golden angle
   return {r * std::cos(phi), y, r * std::sin(phi)};
 }
+
+// Points `spacing` apart over a box from `lo` across `extent`, centred in it (equal margins on both
+// sides), point i with x fastest, then y, then z (pack::ProbeGridRecord's order): the probes' grid
+// and the anchors' lattice.
+struct CentredGrid {
+  static int points_along(float extent, float spacing) {
+    return int(std::floor(std::max(0.0f, extent) / spacing)) + 1;
+  }
+  CentredGrid(const glm::vec3& lo, const glm::vec3& extent, float spacing_m)
+      : size(points_along(extent.x, spacing_m), points_along(extent.y, spacing_m),
+             points_along(extent.z, spacing_m)),
+        origin(lo + 0.5f * (extent - spacing_m * glm::vec3(size - glm::ivec3(1)))),
+        spacing(spacing_m) {}
+  size_t count() const { return size_t(size.x) * size_t(size.y) * size_t(size.z); }
+  glm::vec3 point(size_t i) const {
+    const glm::ivec3 g(int(i % size_t(size.x)), int(i / size_t(size.x) % size_t(size.y)),
+                       int(i / (size_t(size.x) * size_t(size.y))));
+    return origin + spacing * glm::vec3(g);
+  }
+  glm::ivec3 size;
+  glm::vec3 origin;
+  float spacing;
+};
 
 // Whether `p` lies inside solid static geometry (in a wall, under the floor, inside a closed
 // box): more than a quarter of 64 rays from it, evenly spread, meet the back of a surface first.
