@@ -36,6 +36,13 @@ struct MapJob {
   const FloatImage* map = nullptr;
   const FloatImage* indirect = nullptr;  // its bounce part's block image, or null
   const FloatImage* direct = nullptr;    // its direct part (ShadowMap::direct), or null
+  // A pane's map and block image in tiles (PaneMap), made dense while its job is cut, in place
+  // of `map` and `indirect`.
+  const TiledImage* tiled_map = nullptr;
+  const TiledImage* tiled_indirect = nullptr;
+  bool has_indirect() const {
+    return (indirect && !indirect->data.empty()) || (tiled_indirect && !tiled_indirect->empty());
+  }
   // Its threshold is half a step of its group's own peak, finer than the authored exposure's (a
   // light far dimmer than the others, which recomposes alone to 8 bits): its bounce light keeps
   // the level tolerance (PackOptions::bounce_tolerance is about the authored image).
@@ -551,19 +558,22 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<float> pane_threshold(maps.panes.size());
   for (size_t k = 0; k < maps.panes.size(); ++k) {
     const PaneMap& pm = maps.panes[k];
-    const bool blocks_only = pm.map.data.empty();  // PaneMap: its block image holds it
-    pane_threshold[k] = blocks_only ? significance_of_peak(pm.peak, pane_threshold_at)
-                                    : significance(pm.map, pane_threshold_at);
+    const bool blocks_only = pm.map.empty();  // PaneMap: its block image holds it
+    pane_threshold[k] =
+        significance_of_peak(blocks_only ? pm.peak : pm.map.peak(), pane_threshold_at);
     MapJob j;
-    j.map = blocks_only ? nullptr : &pm.map;
-    j.indirect = &pm.indirect;
+    j.tiled_map = blocks_only ? nullptr : &pm.map;
+    j.tiled_indirect = &pm.indirect;
     j.indirect_only = true;
     j.prototype.kind = kGroupContribution;
     j.prototype.light = int(first_pane + k);
     j.prototype.weight = strongest_moving;
     j.threshold = pane_threshold[k];
     j.what = "pane " + std::to_string(k) + " of the moving lights";
-    if (!blocks_only) check_map(pm.map, layout, 3, 3, j.what);
+    if (!blocks_only && (pm.map.width() != layout.width || pm.map.height() != layout.height ||
+                         pm.map.channels() != 3))
+      throw CookError(j.what + ": its map does not match the " + std::to_string(layout.width) +
+                      "x" + std::to_string(layout.height) + " light map");
     jobs.push_back(j);
   }
   std::vector<const ShadowMap*> shadows;
@@ -671,9 +681,14 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   const std::vector<Region> coarse =
       can_split ? coarse_regions(layout.regions, scale, coarse_w, coarse_h) : std::vector<Region>{};
   for (const MapJob& j : jobs) {
-    if (!j.indirect || j.indirect->data.empty() || !can_split) continue;
-    if (j.indirect->width != coarse_w || j.indirect->height != coarse_h ||
-        j.indirect->channels != 3)
+    if (!j.has_indirect() || !can_split) continue;
+    const bool dims = j.tiled_indirect
+                          ? j.tiled_indirect->width() == coarse_w &&
+                                j.tiled_indirect->height() == coarse_h &&
+                                j.tiled_indirect->channels() == 3
+                          : j.indirect->width == coarse_w && j.indirect->height == coarse_h &&
+                                j.indirect->channels == 3;
+    if (!dims)
       throw CookError(j.what + ": its indirect block image does not match the layout's " +
                       std::to_string(scale) + "x" + std::to_string(scale) + " blocks");
   }
@@ -713,7 +728,16 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   std::vector<PartsDecision> parts(jobs.size());
   const ChartUnits units = chart_units(layout);
   parallel_for(int(jobs.size()), threads, [&](int i) {
-    const MapJob& j = jobs[size_t(i)];
+    MapJob j = jobs[size_t(i)];
+    FloatImage tiled_map, tiled_indirect;  // a pane's, dense while it is cut
+    if (j.tiled_map) {
+      tiled_map = j.tiled_map->dense();
+      j.map = &tiled_map;
+    }
+    if (j.tiled_indirect) {
+      tiled_indirect = j.tiled_indirect->dense();
+      j.indirect = &tiled_indirect;
+    }
     // How a map is cut: its significance threshold (map units) and each texel's factor on the
     // level tolerance, if any.
     struct CutRule {
@@ -1091,7 +1115,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
   // across a crease; the runtime presents both maps signed and a game clamps L + I.
   std::map<int, uint64_t> group_plain, group_split;
   for (size_t i = 0; i < jobs.size(); ++i) {
-    const bool splittable = can_split && jobs[i].indirect && !jobs[i].indirect->data.empty();
+    const bool splittable = can_split && jobs[i].has_indirect();
     group_plain[jobs[i].prototype.light] += split[i].plain;
     group_split[jobs[i].prototype.light] +=
         splittable ? split[i].detail + split[i].indirect : split[i].plain;
@@ -1100,7 +1124,7 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     const int g = jobs[i].prototype.light;
     const bool split_group = can_split && (options.always_split || jobs[i].indirect_only ||
                                            group_split[g] < group_plain[g]);
-    if (!split_group || !jobs[i].indirect || jobs[i].indirect->data.empty()) {
+    if (!split_group || !jobs[i].has_indirect()) {
       per_job_q[i].clear();
       continue;
     }

@@ -388,11 +388,21 @@ void finalize_maps(BakedMaps& maps, const Scene& scene, const Layout& layout,
   for (ShadowMap& s : maps.shadows) all.push_back(&s.map), add(s.direct);
   for (PairCorrectionMap& p : maps.pair_corrections) all.push_back(&p.map), add(p.direct);
   for (StaticShadowMap& s : maps.static_shadows) all.push_back(&s.map), add(s.direct);
+  // Panes with a light-map-sized map (else their block image alone, PaneMap), dense while they
+  // are finalized.
+  std::vector<TiledImage*> tiled;
   for (PaneMap& p : maps.panes)
-    if (!p.map.data.empty()) all.push_back(&p.map);  // else its block image alone (PaneMap)
+    if (!p.map.empty()) tiled.push_back(&p.map);
   // Each map alone: both cores.
-  parallel_for(int(all.size()), worker_count(0), [&](int i) {
-    finalize_map(*all[size_t(i)], scene, layout, texels);
+  parallel_for(int(all.size() + tiled.size()), worker_count(0), [&](int i) {
+    if (size_t(i) < all.size()) {
+      finalize_map(*all[size_t(i)], scene, layout, texels);
+    } else {
+      TiledImage& t = *tiled[size_t(i) - all.size()];
+      FloatImage m = t.dense();
+      finalize_map(m, scene, layout, texels);
+      t = TiledImage(m);
+    }
     if (progress) progress->advance();
   });
 }

@@ -2,7 +2,6 @@
 // short, altered or crafted to lie is refused with a message, never read past its end.
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -10,6 +9,7 @@
 #include "lightpatch/cooker/error.h"
 #include "lightpatch/cooker/group_file.h"
 #include "lightpatch/pack_view.h"
+#include "support/same_bits.h"
 
 namespace lightpatch::test {
 namespace {
@@ -82,15 +82,6 @@ GroupFileExpect expect_for(const GroupBake& g) {
   e.lights = 6;
   e.max_maps = 8;
   return e;
-}
-
-void expect_same_bits(const FloatImage& a, const FloatImage& b) {
-  ASSERT_EQ(a.width, b.width);
-  ASSERT_EQ(a.height, b.height);
-  ASSERT_EQ(a.channels, b.channels);
-  ASSERT_EQ(a.data.size(), b.data.size());
-  for (size_t i = 0; i < a.data.size(); ++i)
-    ASSERT_EQ(std::bit_cast<uint32_t>(a.data[i]), std::bit_cast<uint32_t>(b.data[i])) << i;
 }
 
 // Rewrites the file's crc after an edit, so that the reader's own checks are what refuses it.

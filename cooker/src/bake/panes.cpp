@@ -227,15 +227,17 @@ void BakeSession::bake_panes(BakedMaps& maps, Progress& progress, Report& report
       // The pack stores a pane on the indirect map alone where its blocks divide the page
       // (pack_builder.cpp): then the block image is all the cook keeps (PaneMap), and the
       // light-map-sized map is never made.
+      FloatImage blocks;
       if (blocks_divide) {
-        pane.peak = b.indirect->add_blocks(std::move(solved[j].indirect), pane.indirect);
+        pane.peak = b.indirect->add_blocks(std::move(solved[j].indirect), blocks);
       } else {
         FloatImage fine(texels.width, texels.height, 3);
-        b.indirect->add(std::move(solved[j].indirect), fine, &pane.indirect);
+        b.indirect->add(std::move(solved[j].indirect), fine, &blocks);
         for (float v : fine.data)
           if (std::isfinite(v)) pane.peak = std::max(pane.peak, v);
-        pane.map = std::move(fine);
+        pane.map = TiledImage(fine);
       }
+      pane.indirect = TiledImage(blocks);
       progress.advance();
     }
   });
