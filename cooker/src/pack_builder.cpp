@@ -228,16 +228,21 @@ nlohmann::json error_json(const EncodingError& e) {
   return j;
 }
 
-void check_map(const FloatImage& m, const Layout& layout, int channels_a, int channels_b,
-               const std::string& what) {
-  if (m.width != layout.width || m.height != layout.height ||
-      (m.channels != channels_a && m.channels != channels_b) ||
-      m.data.size() != size_t(m.width) * m.height * m.channels) {
-    throw CookError(what + ": " + std::to_string(m.width) + "x" + std::to_string(m.height) + "x" +
-                    std::to_string(m.channels) + " does not match the " +
+void check_map(int width, int height, int channels, const Layout& layout, int channels_a,
+               int channels_b, const std::string& what) {
+  if (width != layout.width || height != layout.height ||
+      (channels != channels_a && channels != channels_b)) {
+    throw CookError(what + ": " + std::to_string(width) + "x" + std::to_string(height) + "x" +
+                    std::to_string(channels) + " does not match the " +
                     std::to_string(layout.width) + "x" + std::to_string(layout.height) +
                     " light map");
   }
+}
+void check_map(const FloatImage& m, const Layout& layout, int channels_a, int channels_b,
+               const std::string& what) {
+  check_map(m.width, m.height, m.channels, layout, channels_a, channels_b, what);
+  if (m.data.size() != size_t(m.width) * m.height * m.channels)
+    throw CookError(what + ": its data does not match its size");
 }
 
 // The probe bake as pack records (pack_format.h, "Light probes"): names into the strings, sets
@@ -570,10 +575,8 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
     j.prototype.weight = strongest_moving;
     j.threshold = pane_threshold[k];
     j.what = "pane " + std::to_string(k) + " of the moving lights";
-    if (!blocks_only && (pm.map.width() != layout.width || pm.map.height() != layout.height ||
-                         pm.map.channels() != 3))
-      throw CookError(j.what + ": its map does not match the " + std::to_string(layout.width) +
-                      "x" + std::to_string(layout.height) + " light map");
+    if (!blocks_only)
+      check_map(pm.map.width(), pm.map.height(), pm.map.channels(), layout, 3, 3, j.what);
     jobs.push_back(j);
   }
   std::vector<const ShadowMap*> shadows;
