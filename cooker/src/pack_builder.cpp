@@ -685,13 +685,11 @@ std::vector<uint8_t> build_pack(const Scene& scene, const Layout& layout, const 
       can_split ? coarse_regions(layout.regions, scale, coarse_w, coarse_h) : std::vector<Region>{};
   for (const MapJob& j : jobs) {
     if (!j.has_indirect() || !can_split) continue;
-    const bool dims = j.tiled_indirect
-                          ? j.tiled_indirect->width() == coarse_w &&
-                                j.tiled_indirect->height() == coarse_h &&
-                                j.tiled_indirect->channels() == 3
-                          : j.indirect->width == coarse_w && j.indirect->height == coarse_h &&
-                                j.indirect->channels == 3;
-    if (!dims)
+    const glm::ivec3 size =
+        j.tiled_indirect ? glm::ivec3(j.tiled_indirect->width(), j.tiled_indirect->height(),
+                                      j.tiled_indirect->channels())
+                         : glm::ivec3(j.indirect->width, j.indirect->height, j.indirect->channels);
+    if (size != glm::ivec3(coarse_w, coarse_h, 3))
       throw CookError(j.what + ": its indirect block image does not match the layout's " +
                       std::to_string(scale) + "x" + std::to_string(scale) + " blocks");
   }

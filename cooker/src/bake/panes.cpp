@@ -233,9 +233,7 @@ void BakeSession::bake_panes(BakedMaps& maps, Progress& progress, Report& report
       } else {
         FloatImage fine(texels.width, texels.height, 3);
         b.indirect->add(std::move(solved[j].indirect), fine, &blocks);
-        for (float v : fine.data)
-          if (std::isfinite(v)) pane.peak = std::max(pane.peak, v);
-        pane.map = TiledImage(fine);
+        pane.map = TiledImage(fine);  // its significance: the finalized map's peak()
       }
       pane.indirect = TiledImage(blocks);
       progress.advance();

@@ -99,7 +99,9 @@ struct PaneMap {
   // (TiledImage): hundreds of them are held until the pack is written.
   TiledImage map;       // light-map size, or empty when `indirect` holds the pane
   TiledImage indirect;  // its block image (BakedMaps), or empty
-  float peak = 0.0f;    // the light-map-sized map's largest finite value (its significance)
+  // With `indirect` alone: the largest finite value its light-map-sized map would hold (its
+  // significance; add_blocks()). With `map`, map.peak() of the finalized map is.
+  float peak = 0.0f;
 };
 
 // Pane `p`'s bounce light at light-map texel `t` of a `width`-texel-wide page, into out[3]: its
